@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Installs what is missing, builds unseen (Release, with tests) and runs the whole test suite.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="${UNSEEN_BUILD_DIR:-$root/build}"
+jobs="${UNSEEN_JOBS:-$(nproc)}"
+
+bash "$root/scripts/install_deps.sh"
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DUNSEEN_BUILD_TESTS=ON \
+  -DUNSEEN_BUILD_BENCHMARKS=ON
+cmake --build "$build" -j "$jobs"
+cd "$build"
+ctest --output-on-failure -j "$jobs" "$@"

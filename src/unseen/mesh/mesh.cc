@@ -1,0 +1,96 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/mesh/mesh.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "unseen/util/error.h"
+
+namespace unseen {
+
+bool Mesh::HasUvTexture() const {
+  if (uvs.empty()) return false;
+  return std::any_of(materials.begin(), materials.end(),
+                     [](const Material& m) { return !m.texture.empty(); });
+}
+
+void Mesh::Check(const std::string& what) const {
+  UNSEEN_CHECK(!triangles.empty(), "{}: mesh has no triangles", what);
+  UNSEEN_CHECK(!vertices.empty(), "{}: mesh has no vertices", what);
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    UNSEEN_CHECK(vertices[i].allFinite(), "{}: vertex {} is not finite ({} {} {})", what, i,
+                 vertices[i].x(), vertices[i].y(), vertices[i].z());
+  }
+  const int n = num_vertices();
+  for (size_t t = 0; t < triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const int idx = triangles[t][k];
+      UNSEEN_CHECK(idx >= 0 && idx < n, "{}: triangle {} has vertex index {} out of range [0, {})",
+                   what, t, idx, n);
+    }
+  }
+  UNSEEN_CHECK(normals.empty() || normals.size() == vertices.size(),
+               "{}: {} normals for {} vertices", what, normals.size(), vertices.size());
+  UNSEEN_CHECK(uvs.empty() || uvs.size() == vertices.size(), "{}: {} uvs for {} vertices",
+               what, uvs.size(), vertices.size());
+  UNSEEN_CHECK(colors_bgr.empty() || colors_bgr.size() == vertices.size(),
+               "{}: {} colours for {} vertices", what, colors_bgr.size(), vertices.size());
+  UNSEEN_CHECK(triangle_materials.empty() || triangle_materials.size() == triangles.size(),
+               "{}: {} triangle materials for {} triangles", what, triangle_materials.size(),
+               triangles.size());
+  for (size_t t = 0; t < triangle_materials.size(); ++t) {
+    const int m = triangle_materials[t];
+    UNSEEN_CHECK(m >= 0 && m < static_cast<int>(materials.size()),
+                 "{}: triangle {} has material {} out of range [0, {})", what, t, m,
+                 materials.size());
+  }
+  for (const Material& m : materials) {
+    UNSEEN_CHECK(m.texture.empty() || m.texture.type() == CV_32FC3,
+                 "{}: material '{}' texture must be CV_32FC3", what, m.name);
+  }
+  for (size_t p = 0; p < projectors.size(); ++p) {
+    UNSEEN_CHECK(!projectors[p].image.empty() && projectors[p].image.type() == CV_32FC3,
+                 "{}: projector {} has no CV_32FC3 image", what, p);
+    projectors[p].camera.Check(what + " projector " + std::to_string(p));
+  }
+}
+
+void Mesh::BoundingBox(Eigen::Vector3f* min, Eigen::Vector3f* max) const {
+  *min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+  *max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
+  for (const Eigen::Vector3f& v : vertices) {
+    *min = min->cwiseMin(v);
+    *max = max->cwiseMax(v);
+  }
+}
+
+void Mesh::BoundingSphere(Eigen::Vector3f* centre, float* radius) const {
+  Eigen::Vector3f lo, hi;
+  BoundingBox(&lo, &hi);
+  *centre = 0.5f * (lo + hi);
+  float r2 = 0.0f;
+  for (const Eigen::Vector3f& v : vertices) r2 = std::max(r2, (v - *centre).squaredNorm());
+  *radius = std::sqrt(r2);
+}
+
+void Mesh::Scale(float s) {
+  for (Eigen::Vector3f& v : vertices) v *= s;
+  for (Projector& p : projectors) {
+    p.cam_from_obj.set_translation(p.cam_from_obj.translation() * static_cast<double>(s));
+  }
+}
+
+void Mesh::ComputeNormals() {
+  normals.assign(vertices.size(), Eigen::Vector3f::Zero());
+  for (const Eigen::Vector3i& t : triangles) {
+    const Eigen::Vector3f n =
+        (vertices[t[1]] - vertices[t[0]]).cross(vertices[t[2]] - vertices[t[0]]);
+    for (int k = 0; k < 3; ++k) normals[t[k]] += n;  // |n| = 2 * area: area-weighted
+  }
+  for (Eigen::Vector3f& n : normals) {
+    const float len = n.norm();
+    n = len > 0.0f ? Eigen::Vector3f(n / len) : Eigen::Vector3f(0, 0, 1);
+  }
+}
+
+}  // namespace unseen
