@@ -21,7 +21,7 @@ int main(int argc, char** argv) {
   app.add_flag("-q,--quiet", [&](int64_t) { verbosity = 0; }, "Warnings and errors only");
   app.parse_complete_callback([&] { unseen::SetVerbosity(verbosity); });
 
-  unseen::cli::AddVersionCommand(app);
+  unseen::cli::AddRegisteredCommands(app);
 
   try {
     app.parse(argc, argv);

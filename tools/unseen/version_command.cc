@@ -16,4 +16,6 @@ void AddVersionCommand(CLI::App& app) {
   });
 }
 
+UNSEEN_REGISTER_COMMAND("version", AddVersionCommand);
+
 }  // namespace unseen::cli
