@@ -76,18 +76,18 @@ Mesh MakeBoxGeometry(const Eigen::Vector3f& size, std::vector<Material> material
   return mesh;
 }
 
-// Draws `text` centred in `image`, scaled to fill about `fill` of the smaller side.
-void PutCentredText(const std::string& text, double fill, const cv::Scalar& colour,
-                    cv::Mat* image) {
-  const int side = std::min(image->cols, image->rows);
+// Draws `text` centred on `centre_y` (pixel row) in `image`, as large as fits in `fill` of
+// the image width and `fill_height` of its height.
+void PutCentredText(const std::string& text, double fill, double fill_height, int centre_y,
+                    const cv::Scalar& colour, cv::Mat* image) {
   const int font = cv::FONT_HERSHEY_SIMPLEX;
   int baseline = 0;
   const cv::Size unit = cv::getTextSize(text, font, 1.0, 1, &baseline);
-  const double scale =
-      fill * side / std::max(1, std::max(unit.width, unit.height + baseline));
+  const double scale = std::min(fill * image->cols / std::max(1, unit.width),
+                                fill_height * image->rows / std::max(1, unit.height));
   const int thickness = std::max(1, static_cast<int>(std::lround(scale * 2.5)));
   const cv::Size size = cv::getTextSize(text, font, scale, thickness, &baseline);
-  const cv::Point origin((image->cols - size.width) / 2, (image->rows + size.height) / 2);
+  const cv::Point origin((image->cols - size.width) / 2, centre_y + size.height / 2);
   cv::putText(*image, text, origin, font, scale, colour, thickness, cv::LINE_AA);
 }
 
@@ -162,7 +162,8 @@ cv::Mat MakeBoxFaceTexture(int kind, int width, int height) {
     case 2: {  // text on yellow
       img.create(height, width, CV_8UC3);
       img.setTo(cv::Scalar(40, 210, 240));
-      PutCentredText("unseen", 0.8, {60, 20, 20}, &img);
+      PutCentredText("unseen", 0.8, 0.35, height / 3, {60, 20, 20}, &img);
+      PutCentredText("6-DoF", 0.6, 0.25, height * 3 / 4, {0, 0, 170}, &img);
       const int period = std::max(4, s / 10);
       for (int y = period / 2; y < height; y += period) {
         cv::line(img, {0, y}, {width / 8, y}, {0, 0, 160}, std::max(1, s / 64));
@@ -285,7 +286,7 @@ Mesh MakeLetteredCube(double edge_m, int texture_px) {
     const std::string letter(1, static_cast<char>('A' + f));
     cv::Mat img(texture_px, texture_px, CV_8UC3, backgrounds[f]);
     const cv::Scalar ink = white_letter[f] ? cv::Scalar(255, 255, 255) : cv::Scalar(0, 0, 0);
-    PutCentredText(letter, 0.7, ink, &img);
+    PutCentredText(letter, 0.7, 0.65, texture_px / 2, ink, &img);
     // A contrasting frame just inside the border marks the face edges.
     const int inset = texture_px / 16;
     cv::rectangle(img, {inset, inset}, {texture_px - 1 - inset, texture_px - 1 - inset}, ink,
