@@ -1,0 +1,125 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/track/flow_solver.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "unseen/track/flow_jacobian.h"
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+// Equations of `n` random surface pixels of a camera, consistent with `twist` (world frame),
+// `outliers` of them with a wrong right-hand side.
+FlowEquations MakeEquations(const PinholeCamera& cam, const Rigid3d& world_from_cam,
+                            const Eigen::Vector3d& origin_world, const Vector6d& twist, int n,
+                            int outliers, std::mt19937* rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  FlowEquations eq;
+  eq.world_from_cam_rotation = world_from_cam.RotationMatrix();
+  const Rigid3d cam_from_world = world_from_cam.Inverse();
+  const Eigen::Vector3d o_c = cam_from_world * origin_world;
+  const float o[3] = {float(o_c.x()), float(o_c.y()), float(o_c.z())};
+  for (int i = 0; i < n; ++i) {
+    const double x = cam.cx + 60 * u(*rng), y = cam.cy + 60 * u(*rng);
+    const double z = o_c.z() + 0.05 * u(*rng);
+    const double gx = 0.1 * u(*rng), gy = 0.1 * u(*rng);
+    const Matrix26d j =
+        ImageMotionJacobian(cam, cam_from_world, origin_world, Eigen::Vector2d(x, y), z);
+    const double flow_dot_g = (Eigen::Vector2d(gx, gy).transpose() * j * twist)(0);
+    float row[6];
+    FlowRowInCamera(float(cam.fx), float(cam.fy), float(cam.cx), float(cam.cy), o, float(x),
+                    float(y), float(z), float(gx), float(gy), row);
+    float b = static_cast<float>(flow_dot_g);
+    if (i < outliers) b += 0.1f * (u(*rng) > 0 ? 1.0f : -1.0f);
+    eq.Add(row, b, static_cast<float>(1.0 / std::hypot(gx, gy)));
+  }
+  return eq;
+}
+
+PinholeCamera Camera() {
+  PinholeCamera cam;
+  cam.width = 512;
+  cam.height = 256;
+  cam.fx = cam.fy = 837.3;
+  cam.cx = 255.5;
+  cam.cy = 127.5;
+  return cam;
+}
+
+TEST(FlowSolver, RecoversTheTwistFromExactEquations) {
+  std::mt19937 rng(3);
+  Vector6d twist;
+  twist << 0.002, -0.001, 0.004, 0.01, -0.02, 0.015;
+  const Rigid3d world_from_cam(ExpSO3(Eigen::Vector3d(0.1, -0.3, 0.05)), Eigen::Vector3d(0.1, 0, 0));
+  const Eigen::Vector3d origin = world_from_cam * Eigen::Vector3d(0.01, 0.02, 1.0);
+  std::vector<FlowEquations> cams{MakeEquations(Camera(), world_from_cam, origin, twist, 2000, 0, &rng)};
+  FlowSolverOptions options;
+  options.kernel = RobustKernel::kNone;
+  options.damping = 0.0;
+  const FlowSolution s = SolveFlow(cams, options);
+  ASSERT_TRUE(s.ok);
+  EXPECT_LT((s.twist - twist).norm(), 1e-5 * twist.norm() + 1e-7) << s.twist.transpose();
+  EXPECT_LT(s.final_rms_px, 1e-3);
+}
+
+TEST(FlowSolver, RobustKernelResistsOutliers) {
+  std::mt19937 rng(5);
+  Vector6d twist;
+  twist << 0.003, 0.002, -0.002, -0.01, 0.02, 0.005;
+  const Rigid3d world_from_cam;
+  const Eigen::Vector3d origin(0.0, 0.0, 1.0);
+  std::vector<FlowEquations> cams{MakeEquations(Camera(), world_from_cam, origin, twist, 3000, 450, &rng)};
+  FlowSolverOptions plain;
+  plain.kernel = RobustKernel::kNone;
+  FlowSolverOptions huber;
+  huber.irls_iterations = 5;
+  FlowSolverOptions tukey;
+  tukey.kernel = RobustKernel::kTukey;
+  tukey.kernel_width = 4.685;
+  tukey.irls_iterations = 5;
+  const double e_plain = (SolveFlow(cams, plain).twist - twist).norm();
+  const double e_huber = (SolveFlow(cams, huber).twist - twist).norm();
+  const double e_tukey = (SolveFlow(cams, tukey).twist - twist).norm();
+  EXPECT_LT(e_huber, 0.5 * e_plain);
+  EXPECT_LT(e_tukey, 0.2 * e_plain);
+}
+
+TEST(FlowSolver, TwoCamerasInOneSolve) {
+  std::mt19937 rng(9);
+  Vector6d twist;
+  twist << -0.004, 0.001, 0.006, 0.02, 0.01, -0.01;
+  const Eigen::Vector3d origin(0.0, 0.0, 1.0);
+  const Rigid3d cam_a;
+  const Rigid3d cam_b(ExpSO3(Eigen::Vector3d(0, -0.6, 0)), Eigen::Vector3d(0.6, 0, 0.2));
+  std::vector<FlowEquations> cams{MakeEquations(Camera(), cam_a, origin, twist, 500, 0, &rng),
+                                  MakeEquations(Camera(), cam_b, origin, twist, 500, 0, &rng)};
+  FlowSolverOptions options;
+  options.kernel = RobustKernel::kNone;
+  options.damping = 0.0;
+  const FlowSolution s = SolveFlow(cams, options);
+  ASSERT_TRUE(s.ok);
+  EXPECT_LT((s.twist - twist).norm(), 1e-5);
+}
+
+TEST(FlowSolver, TooFewEquationsIsNotOk) {
+  std::mt19937 rng(1);
+  std::vector<FlowEquations> cams{
+      MakeEquations(Camera(), Rigid3d(), Eigen::Vector3d(0, 0, 1), Vector6d::Zero(), 5, 0, &rng)};
+  EXPECT_FALSE(SolveFlow(cams, FlowSolverOptions()).ok);
+  EXPECT_FALSE(SolveFlow({}, FlowSolverOptions()).ok);
+}
+
+TEST(FlowSolver, OptionsCheck) {
+  FlowSolverOptions o;
+  EXPECT_NO_THROW(o.Check());
+  o.kernel_width = -1;
+  EXPECT_THROW(o.Check(), Error);
+  EXPECT_THROW(ParseRobustKernel("cauchy"), Error);
+  EXPECT_EQ(ParseRobustKernel("tukey"), RobustKernel::kTukey);
+}
+
+}  // namespace
+}  // namespace unseen
