@@ -8,6 +8,28 @@
 // Conventions: pixel centres at integer coordinates (SPEC 2); a pixel is covered when
 // its centre is inside the triangle, with a top-left fill rule so that shared edges are
 // covered exactly once. Colour is sampled perspective-correctly (bilinear for textures).
+//
+// How it works: vertices are moved to the camera frame and projected once; screen
+// positions are snapped to 1/256 px so that the edge functions are exact 64-bit
+// integers (the fill rule is then exact: no cracks, no double coverage). Triangles
+// crossing the near plane z = near_m are clipped in 3-D (Sutherland-Hodgman), as are the
+// rare ones projecting far outside the image (a guard band). The z-buffer holds 1/z,
+// which is affine in screen space; metric z = 1 / (1/z) is written at the end. Colour is
+// deferred: the raster pass stores, per pixel, the winning triangle and its
+// perspective-correct barycentric coordinates; a resolve pass then colours each visible
+// pixel once. The lens distortion of `camera` is ignored (it is removed at input).
+//
+// Colour sources, first that applies (per pixel):
+//  1. projective textures (Mesh::projectors non-empty): among the projectors that see the
+//     point (in front, inside the image, surface facing the projector) the one facing it
+//     most squarely; bilinear, clamped to the image edge. Self-occlusion as seen from the
+//     projector is not modelled. A point no projector sees falls through to 2-4.
+//  2. UV texture of the triangle's material (triangles without `triangle_materials` use
+//     material 0): uv OBJ style (v up, (0, 0) the bottom-left corner of the image),
+//     bilinear, *wrapping* (repeat) outside [0, 1) and across the border. Not modulated by
+//     the diffuse colour.
+//  3. per-vertex colours, interpolated perspective-correctly.
+//  4. the material's diffuse colour; white when the mesh has no material.
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -22,6 +44,7 @@ struct RenderOptions {
   bool cull_back_faces = true;     // drop triangles facing away from the camera
   bool write_color = true;         // false: depth and mask only (faster)
   bool write_triangle_ids = false; // fill RenderBuffers::triangle_id
+  bool write_normals = false;      // fill RenderBuffers::normal (for shading; not the tracker)
   double near_m = 1e-3;            // near clipping distance, metres (> 0)
   void Check() const;
 };
@@ -34,11 +57,21 @@ struct RenderBuffers {
   cv::Mat depth;        // CV_32FC1 camera-frame z, metres; 0 where not covered
   cv::Mat mask;         // CV_8UC1, 255 where covered, 0 elsewhere
   cv::Mat triangle_id;  // CV_32SC1, -1 where not covered (only with write_triangle_ids)
+  // CV_32FC3 unit surface normal in the camera frame, as stored in the mesh (outward),
+  // interpolated from Mesh::normals or the face normal when the mesh has none; zero where
+  // not covered (only with write_normals).
+  cv::Mat normal;
+
+  // Internal per-pixel scratch of the raster pass, kept here so that it is reused.
+  cv::Mat scratch_ids;      // CV_32SC1 winning triangle
+  cv::Mat scratch_weights;  // CV_32FC2 barycentric coordinates (b1, b2) times 1/z
 };
 
 // Renders `mesh` seen from `camera` with the object at `cam_from_obj`, restricted to
 // `roi` (clipped to the image). Buffers in `out` are reused when their size fits.
 // Throws unseen::Error for an invalid mesh/camera; an empty roi gives empty buffers.
+// Buffers not asked for by `options` (triangle_id, normal, color) are released.
+// Images are limited to 32 768 px per side (fixed-point screen coordinates).
 void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_from_obj,
             const PixelRect& roi, const RenderOptions& options, RenderBuffers* out);
 

@@ -1,0 +1,640 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/render/rasterizer.h"
+
+#include <cmath>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+PinholeCamera TestCamera(int width = 160, int height = 120) {
+  PinholeCamera c;
+  c.width = width;
+  c.height = height;
+  c.fx = 100.0;
+  c.fy = 110.0;
+  c.cx = (width - 1) / 2.0 + 0.25;
+  c.cy = (height - 1) / 2.0 - 0.3;
+  return c;
+}
+
+// A quad p0 p1 p2 p3 (counter-clockwise seen from the side it faces) as two triangles.
+Mesh MakeQuad(const std::vector<Eigen::Vector3f>& corners) {
+  Mesh m;
+  m.vertices = corners;
+  m.triangles = {{0, 1, 2}, {0, 2, 3}};
+  return m;
+}
+
+// A camera-facing quad at depth z covering pixel rectangle [u0, u1] x [v0, v1] (pixels).
+// Seen from the camera, counter-clockwise with y down means: top-left, bottom-left,
+// bottom-right, top-right.
+Mesh MakeScreenQuad(const PinholeCamera& cam, double u0, double v0, double u1, double v1,
+                    double z) {
+  auto at = [&](double u, double v) {
+    return cam.Unproject(Eigen::Vector2d(u, v), z).cast<float>().eval();
+  };
+  return MakeQuad({at(u0, v0), at(u0, v1), at(u1, v1), at(u1, v0)});
+}
+
+// Axis-aligned cube centred on the origin, triangles counter-clockwise seen from outside.
+Mesh MakeCube(float edge) {
+  Mesh m;
+  const float h = edge / 2;
+  for (int i = 0; i < 8; ++i) {
+    m.vertices.emplace_back(i & 1 ? h : -h, i & 2 ? h : -h, i & 4 ? h : -h);
+  }
+  // Faces as quads of corner indices, counter-clockwise seen from outside.
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    m.triangles.emplace_back(q[0], q[1], q[2]);
+    m.triangles.emplace_back(q[0], q[2], q[3]);
+  }
+  return m;
+}
+
+// UV sphere with vertex colours that vary over the surface.
+Mesh MakeSphere(float radius, int rings, int segments) {
+  Mesh m;
+  for (int r = 0; r <= rings; ++r) {
+    const double theta = M_PI * r / rings;
+    for (int s = 0; s <= segments; ++s) {
+      const double phi = 2 * M_PI * s / segments;
+      const Eigen::Vector3f n(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                              std::cos(theta));
+      m.vertices.push_back(radius * n);
+      m.normals.push_back(n);
+      m.colors_bgr.emplace_back(0.5f + 0.5f * n.x(), 0.5f + 0.5f * n.y(), 0.5f + 0.5f * n.z());
+      m.uvs.emplace_back(float(s) / segments, 1.0f - float(r) / rings);
+    }
+  }
+  const int row = segments + 1;
+  for (int r = 0; r < rings; ++r) {
+    for (int s = 0; s < segments; ++s) {
+      const int a = r * row + s, b = a + 1, c = a + row, d = c + 1;
+      // Outward: theta grows downward from the +z pole, phi counter-clockwise about +z.
+      if (r > 0) m.triangles.emplace_back(a, c, b);
+      if (r + 1 < rings) m.triangles.emplace_back(b, c, d);
+    }
+  }
+  return m;
+}
+
+Rigid3d Pose(const Eigen::Vector3d& rotation_vector, const Eigen::Vector3d& t) {
+  return Rigid3d(ExpSO3(rotation_vector), t);
+}
+
+cv::Mat RandomTexture(int w, int h, unsigned seed) {
+  cv::Mat t(h, w, CV_32FC3);
+  cv::RNG rng(seed);
+  rng.fill(t, cv::RNG::UNIFORM, 0.0, 1.0);
+  return t;
+}
+
+// Ray-plane depth at pixel (u, v) for the plane n . p = d (camera frame).
+double PlaneDepth(const PinholeCamera& cam, double u, double v, const Eigen::Vector3d& n,
+                  double d) {
+  const Eigen::Vector3d ray((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
+  return d / n.dot(ray);
+}
+
+// Float rounding plus the effect of snapping vertices to 1/256 px: the depth gradient
+// times 1/256 px.
+double DepthTolerance(const PinholeCamera& cam, double u, double v, const Eigen::Vector3d& n,
+                      double d) {
+  const double z = PlaneDepth(cam, u, v, n, d);
+  const double gradient = std::abs(PlaneDepth(cam, u + 1, v, n, d) - z) +
+                          std::abs(PlaneDepth(cam, u, v + 1, n, d) - z);
+  return 1e-6 * z + gradient / 256.0;
+}
+
+TEST(Rasterizer, FrontoParallelPlaneHasExactDepthAndCoverage) {
+  const PinholeCamera cam = TestCamera();
+  const double z = 1.7;
+  const Mesh quad = MakeScreenQuad(cam, 20.3, 10.6, 130.7, 95.2, z);
+  RenderBuffers out;
+  Render(quad, cam, Rigid3d(), cam.ImageRect(), RenderOptions(), &out);
+  ASSERT_EQ(out.depth.size(), cv::Size(cam.width, cam.height));
+  int covered = 0;
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
+      const bool inside = u >= 21 && u <= 130 && v >= 11 && v <= 95;
+      ASSERT_EQ(out.mask.at<uint8_t>(v, u), inside ? 255 : 0) << u << " " << v;
+      if (inside) {
+        ASSERT_NEAR(out.depth.at<float>(v, u), z, 1e-6 * z);
+        ++covered;
+      } else {
+        ASSERT_EQ(out.depth.at<float>(v, u), 0.0f);
+      }
+    }
+  }
+  EXPECT_EQ(covered, 110 * 85);
+  // No texture, no vertex colour, no material: white.
+  EXPECT_EQ(out.color.at<cv::Vec3f>(50, 50), cv::Vec3f(1, 1, 1));
+  EXPECT_EQ(out.color.at<cv::Vec3f>(5, 5), cv::Vec3f(0, 0, 0));
+}
+
+TEST(Rasterizer, TiltedPlaneDepthMatchesRayIntersection) {
+  const PinholeCamera cam = TestCamera();
+  // A large quad in the plane through (0, 0, 2) with normal n, seen from the front.
+  const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.4, -1.0).normalized();
+  const Eigen::Vector3d centre(0.05, -0.02, 2.0);
+  const Eigen::Vector3d e1 = n.cross(Eigen::Vector3d::UnitX()).normalized();
+  const Eigen::Vector3d e2 = n.cross(e1);
+  std::vector<Eigen::Vector3f> corners;
+  for (const auto& [a, b] : std::vector<std::pair<double, double>>{{-1, -1}, {1, -1}, {1, 1}, {-1, 1}}) {
+    corners.push_back((centre + 0.6 * (a * e1 + b * e2)).cast<float>());
+  }
+  Mesh quad = MakeQuad(corners);
+  RenderOptions options;
+  options.cull_back_faces = false;  // orientation is not the point here
+  RenderBuffers out;
+  Render(quad, cam, Rigid3d(), cam.ImageRect(), options, &out);
+  const double d = n.dot(centre);
+  int covered = 0;
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
+      if (!out.mask.at<uint8_t>(v, u)) continue;
+      ++covered;
+      const double expected = PlaneDepth(cam, u, v, n, d);
+      ASSERT_NEAR(out.depth.at<float>(v, u), expected, DepthTolerance(cam, u, v, n, d))
+          << u << " " << v;
+    }
+  }
+  EXPECT_GT(covered, 1000);
+}
+
+TEST(Rasterizer, CubeSilhouetteMatchesProjectedCorners) {
+  const PinholeCamera cam = TestCamera(200, 150);
+  const Mesh cube = MakeCube(0.3f);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Rigid3d pose = Pose(Eigen::Vector3d(0.4 + 0.3 * trial, -0.7 + 0.2 * trial, 0.2 * trial),
+                              Eigen::Vector3d(0.03 * trial, -0.02, 1.2 + 0.1 * trial));
+    RenderBuffers out;
+    Render(cube, cam, pose, cam.ImageRect(), RenderOptions(), &out);
+    std::vector<cv::Point2f> corners, hull;
+    for (const Eigen::Vector3f& v : cube.vertices) {
+      const Eigen::Vector2d q = cam.Project(pose * v.cast<double>());
+      corners.emplace_back(float(q.x()), float(q.y()));
+    }
+    cv::convexHull(corners, hull);
+    int checked = 0;
+    for (int v = 0; v < cam.height; ++v) {
+      for (int u = 0; u < cam.width; ++u) {
+        const double dist = cv::pointPolygonTest(hull, cv::Point2f(u, v), true);
+        if (std::abs(dist) < 0.02) continue;  // on the outline: up to the fill rule
+        ++checked;
+        ASSERT_EQ(out.mask.at<uint8_t>(v, u) != 0, dist > 0) << trial << ": " << u << " " << v;
+      }
+    }
+    EXPECT_GT(checked, cam.width * cam.height * 9 / 10);
+  }
+}
+
+TEST(Rasterizer, TexturedQuadReproducesItsTexture) {
+  const PinholeCamera cam = TestCamera();
+  const int w = 64, h = 48, u0 = 30, v0 = 20;
+  // Pixel edges at half-integers: pixel (u0 + i, v0 + j) centre is texel (i, j) centre.
+  Mesh quad = MakeScreenQuad(cam, u0 - 0.5, v0 - 0.5, u0 + w - 0.5, v0 + h - 0.5, 1.3);
+  quad.uvs = {{0, 1}, {0, 0}, {1, 0}, {1, 1}};  // v up: image row 0 is v = 1
+  Material material;
+  material.texture = RandomTexture(w, h, 7);
+  quad.materials = {material};
+  RenderBuffers out;
+  Render(quad, cam, Rigid3d(), cam.ImageRect(), RenderOptions(), &out);
+  for (int j = 0; j < h; ++j) {
+    for (int i = 0; i < w; ++i) {
+      ASSERT_EQ(out.mask.at<uint8_t>(v0 + j, u0 + i), 255);
+      const cv::Vec3f got = out.color.at<cv::Vec3f>(v0 + j, u0 + i);
+      const cv::Vec3f want = material.texture.at<cv::Vec3f>(j, i);
+      ASSERT_LT(cv::norm(got - want), 1e-4) << i << " " << j;
+    }
+  }
+  EXPECT_EQ(cv::countNonZero(out.mask), w * h);
+}
+
+TEST(Rasterizer, TextureWrapsAndMaterialColourAppliesWithoutTexture) {
+  const PinholeCamera cam = TestCamera();
+  Mesh quad = MakeScreenQuad(cam, 9.5, 9.5, 29.5, 29.5, 1.0);
+  // uv shifted by exactly one period: the same image as uv in [0, 1].
+  quad.uvs = {{1, 2}, {1, 1}, {2, 1}, {2, 2}};
+  Material textured;
+  textured.texture = RandomTexture(20, 20, 3);
+  Material plain;
+  plain.diffuse_bgr = Eigen::Vector3f(0.1f, 0.2f, 0.3f);
+  quad.materials = {textured, plain};
+  quad.triangle_materials = {0, 0};
+  RenderBuffers out;
+  Render(quad, cam, Rigid3d(), cam.ImageRect(), RenderOptions(), &out);
+  EXPECT_LT(cv::norm(out.color(cv::Rect(10, 10, 20, 20)), textured.texture, cv::NORM_INF), 1e-4);
+  quad.triangle_materials = {1, 1};
+  Render(quad, cam, Rigid3d(), cam.ImageRect(), RenderOptions(), &out);
+  EXPECT_EQ(out.color.at<cv::Vec3f>(15, 15), cv::Vec3f(0.1f, 0.2f, 0.3f));
+}
+
+// Fan and jittered grid covering [x0, x1] x [y0, y1]: every pixel centre strictly inside
+// must be covered by exactly one triangle.
+TEST(Rasterizer, SharedEdgesAreCoveredExactlyOnce) {
+  const PinholeCamera cam = TestCamera(120, 100);
+  const double x0 = 10.3, y0 = 8.7, x1 = 101.6, y1 = 90.4, z = 2.0;
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> jitter(-2.0, 2.0);
+  std::uniform_int_distribution<int> coin(0, 2);
+  Mesh grid;
+  const int n = 9;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      double u = x0 + (x1 - x0) * i / n, v = y0 + (y1 - y0) * j / n;
+      if (i > 0 && i < n && j > 0 && j < n) {
+        if (coin(rng) == 0) {  // exactly on a pixel centre: the tie case
+          u = std::round(u);
+          v = std::round(v);
+        } else {
+          u += jitter(rng);
+          v += jitter(rng);
+        }
+      }
+      grid.vertices.push_back(cam.Unproject(Eigen::Vector2d(u, v), z).cast<float>());
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      // Camera-facing: counter-clockwise on screen (y down) is a, c, d, b.
+      if ((i + j) % 2) {
+        grid.triangles.emplace_back(a, c, d);
+        grid.triangles.emplace_back(a, d, b);
+      } else {
+        grid.triangles.emplace_back(a, c, b);
+        grid.triangles.emplace_back(b, c, d);
+      }
+    }
+  }
+  // A fan around a centre vertex on a pixel centre, with spokes through pixel centres.
+  Mesh fan;
+  fan.vertices.push_back(cam.Unproject(Eigen::Vector2d(55, 49), z).cast<float>());
+  const int spokes = 16;
+  for (int k = 0; k < spokes; ++k) {
+    const double a = -2 * M_PI * k / spokes;  // counter-clockwise on screen
+    fan.vertices.push_back(
+        cam.Unproject(Eigen::Vector2d(std::round(55 + 40 * std::cos(a)), std::round(49 + 40 * std::sin(a))), z)
+            .cast<float>());
+  }
+  for (int k = 0; k < spokes; ++k) fan.triangles.emplace_back(0, 1 + k, 1 + (k + 1) % spokes);
+
+  for (const Mesh* mesh : {&grid, &fan}) {
+    cv::Mat count = cv::Mat::zeros(cam.height, cam.width, CV_32SC1);
+    RenderOptions options;
+    RenderBuffers out;
+    for (int t = 0; t < mesh->num_triangles(); ++t) {
+      Mesh one;
+      one.vertices = mesh->vertices;
+      one.triangles = {mesh->triangles[t]};
+      Render(one, cam, Rigid3d(), cam.ImageRect(), options, &out);
+      cv::Mat m;
+      out.mask.convertTo(m, CV_32S, 1.0 / 255);
+      count += m;
+    }
+    double max_count;
+    cv::minMaxLoc(count, nullptr, &max_count);
+    EXPECT_EQ(max_count, 1.0) << "double coverage";
+    options.write_triangle_ids = true;
+    Render(*mesh, cam, Rigid3d(), cam.ImageRect(), options, &out);
+    EXPECT_EQ(cv::countNonZero(out.mask), cv::countNonZero(count));
+    if (mesh == &grid) {
+      for (int v = 0; v < cam.height; ++v) {
+        for (int u = 0; u < cam.width; ++u) {
+          const bool inside = u > x0 && u < x1 && v > y0 && v < y1;
+          ASSERT_EQ(count.at<int>(v, u), inside ? 1 : 0) << u << " " << v;
+          ASSERT_EQ(out.triangle_id.at<int>(v, u) >= 0, inside);
+        }
+      }
+    } else {
+      EXPECT_GT(cv::countNonZero(count), 4000);
+    }
+  }
+}
+
+TEST(Rasterizer, RoiRenderEqualsWindowOfFullRender) {
+  const PinholeCamera cam = TestCamera(200, 160);
+  const Mesh sphere = MakeSphere(0.2f, 12, 24);
+  const Rigid3d pose = Pose(Eigen::Vector3d(0.3, 0.5, -0.2), Eigen::Vector3d(0.05, 0.02, 0.9));
+  RenderOptions options;
+  options.write_triangle_ids = true;
+  options.write_normals = true;
+  RenderBuffers full, part;
+  Render(sphere, cam, pose, cam.ImageRect(), options, &full);
+  const PixelRect roi{37, 21, 151, 133};
+  Render(sphere, cam, pose, roi, options, &part);
+  ASSERT_EQ(part.roi, roi);
+  const cv::Rect window(roi.x0, roi.y0, roi.width(), roi.height());
+  EXPECT_EQ(cv::norm(full.depth(window), part.depth, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(full.mask(window), part.mask, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(full.color(window), part.color, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(full.normal(window), part.normal, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(full.triangle_id(window), part.triangle_id, cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::countNonZero(part.mask), 1000);
+
+  // A roi reaching outside the image is clipped to it.
+  Render(sphere, cam, pose, PixelRect{-10, 100, 50, 400}, options, &part);
+  EXPECT_EQ(part.roi, (PixelRect{0, 100, 50, 160}));
+  EXPECT_EQ(part.depth.size(), cv::Size(50, 60));
+  // An empty roi gives empty buffers.
+  Render(sphere, cam, pose, PixelRect{300, 0, 400, 10}, options, &part);
+  EXPECT_TRUE(part.roi.empty());
+  EXPECT_TRUE(part.depth.empty());
+  EXPECT_TRUE(part.mask.empty());
+  EXPECT_TRUE(part.color.empty());
+}
+
+TEST(Rasterizer, DepthOnlyMatchesColourRenderAndBuffersAreReused) {
+  const PinholeCamera cam = TestCamera(200, 160);
+  const Mesh sphere = MakeSphere(0.2f, 10, 20);
+  const Rigid3d pose = Pose(Eigen::Vector3d(0.1, 0.2, 0.3), Eigen::Vector3d(0.0, 0.0, 1.0));
+  RenderBuffers a, b;
+  Render(sphere, cam, pose, cam.ImageRect(), RenderOptions(), &a);
+  RenderOptions depth_only;
+  depth_only.write_color = false;
+  Render(sphere, cam, pose, cam.ImageRect(), depth_only, &b);
+  EXPECT_EQ(cv::norm(a.depth, b.depth, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(a.mask, b.mask, cv::NORM_INF), 0.0);
+  EXPECT_TRUE(b.color.empty());
+  EXPECT_TRUE(b.triangle_id.empty());
+  const float* depth_data = a.depth.ptr<float>();
+  const float* color_data = a.color.ptr<float>();
+  Render(sphere, cam, pose * Pose(Eigen::Vector3d(0, 0.1, 0), Eigen::Vector3d::Zero()),
+         cam.ImageRect(), RenderOptions(), &a);
+  EXPECT_EQ(a.depth.ptr<float>(), depth_data);
+  EXPECT_EQ(a.color.ptr<float>(), color_data);
+}
+
+TEST(Rasterizer, BackFaceCulling) {
+  const PinholeCamera cam = TestCamera();
+  // Left quad faces the camera, right quad faces away (reversed winding).
+  Mesh front = MakeScreenQuad(cam, 10.5, 10.5, 50.5, 50.5, 1.0);
+  Mesh back = MakeScreenQuad(cam, 80.5, 10.5, 120.5, 50.5, 1.0);
+  for (Eigen::Vector3i& t : back.triangles) std::swap(t[1], t[2]);
+  Mesh both = front;
+  for (const Eigen::Vector3i& t : back.triangles) both.triangles.push_back(t.array() + 4);
+  both.vertices.insert(both.vertices.end(), back.vertices.begin(), back.vertices.end());
+  RenderBuffers out;
+  RenderOptions options;
+  Render(both, cam, Rigid3d(), cam.ImageRect(), options, &out);
+  EXPECT_EQ(out.mask.at<uint8_t>(30, 30), 255);
+  EXPECT_EQ(out.mask.at<uint8_t>(30, 100), 0);
+  EXPECT_EQ(cv::countNonZero(out.mask), 40 * 40);
+  options.cull_back_faces = false;
+  Render(both, cam, Rigid3d(), cam.ImageRect(), options, &out);
+  EXPECT_EQ(out.mask.at<uint8_t>(30, 100), 255);
+  EXPECT_EQ(cv::countNonZero(out.mask), 2 * 40 * 40);
+
+  // A closed cube: without culling the nearest surface still wins.
+  const Mesh cube = MakeCube(0.4f);
+  const Rigid3d pose = Pose(Eigen::Vector3d(0.5, 0.6, 0.1), Eigen::Vector3d(0, 0, 1.5));
+  RenderBuffers culled, unculled;
+  Render(cube, cam, pose, cam.ImageRect(), RenderOptions(), &culled);
+  Render(cube, cam, pose, cam.ImageRect(), options, &unculled);
+  EXPECT_EQ(cv::norm(culled.mask, unculled.mask, cv::NORM_INF), 0.0);
+  EXPECT_LT(cv::norm(culled.depth, unculled.depth, cv::NORM_INF), 1e-6);
+  const Mesh sphere = MakeSphere(0.2f, 10, 20);
+  Render(sphere, cam, pose, cam.ImageRect(), RenderOptions(), &culled);
+  Render(sphere, cam, pose, cam.ImageRect(), options, &unculled);
+  EXPECT_EQ(cv::norm(culled.mask, unculled.mask, cv::NORM_INF), 0.0);
+  EXPECT_LT(cv::norm(culled.depth, unculled.depth, cv::NORM_INF), 1e-6);
+}
+
+TEST(Rasterizer, TriangleCrossingTheNearPlaneIsClipped) {
+  const PinholeCamera cam = TestCamera();
+  // A floor y = 0.3 from behind the camera (z = -2) to z = 6, x in [-3, 3], facing up
+  // (normal -y, towards the camera which is above it).
+  const float y = 0.3f;
+  const Mesh floor = MakeQuad({{-3, y, -2}, {3, y, -2}, {3, y, 6}, {-3, y, 6}});
+  const Eigen::Vector3d n(0, 1, 0);
+  RenderOptions options;
+  options.write_triangle_ids = true;
+  for (double near : {0.05, 1.0}) {  // 1.0: the cut at z = near is in view
+    for (bool cull : {true, false}) {
+      options.near_m = near;
+      options.cull_back_faces = cull;
+      RenderBuffers out;
+      Render(floor, cam, Rigid3d(), cam.ImageRect(), options, &out);
+      int covered = 0;
+      for (int v = 0; v < cam.height; ++v) {
+        for (int u = 0; u < cam.width; ++u) {
+          const double ray_y = (v - cam.cy) / cam.fy;
+          bool expected = false;
+          if (ray_y > 0) {
+            const double z = y / ray_y, x = z * (u - cam.cx) / cam.fx;
+            const bool inside = z > near + 0.005 && z < 6 - 0.1 && std::abs(x) < 3 - 0.02;
+            const bool outside = z < near - 0.005 || z > 6 + 0.1 || std::abs(x) > 3 + 0.02;
+            if (!inside && !outside) continue;  // on an outline: up to rounding
+            expected = inside;
+          }
+          ASSERT_EQ(out.mask.at<uint8_t>(v, u) != 0, expected)
+              << u << " " << v << " near " << near << " cull " << cull;
+          if (expected) {
+            ++covered;
+            ASSERT_NEAR(out.depth.at<float>(v, u), PlaneDepth(cam, u, v, n, y),
+                        DepthTolerance(cam, u, v, n, y));
+            ASSERT_GE(out.depth.at<float>(v, u), near);
+            ASSERT_GE(out.triangle_id.at<int>(v, u), 0);
+            ASSERT_LE(out.triangle_id.at<int>(v, u), 1);
+          }
+        }
+      }
+      EXPECT_GT(covered, 1000);
+    }
+  }
+  // Entirely behind the camera: nothing.
+  const Mesh behind = MakeQuad({{-1, y, -3}, {1, y, -3}, {1, y, -1}, {-1, y, -1}});
+  RenderBuffers out;
+  Render(behind, cam, Rigid3d(), cam.ImageRect(), options, &out);
+  EXPECT_EQ(cv::countNonZero(out.mask), 0);
+}
+
+TEST(Rasterizer, VertexColoursInterpolatePerspectiveCorrectly) {
+  const PinholeCamera cam = TestCamera();
+  // A strongly tilted triangle; colours affine in the 3-D position, so the correct
+  // (perspective) interpolation reproduces that affine function exactly.
+  Mesh tri;
+  tri.vertices = {{-0.5f, -0.4f, 0.8f}, {0.1f, 0.5f, 1.2f}, {0.6f, -0.3f, 3.0f}};
+  tri.triangles = {{0, 1, 2}};
+  auto colour_of = [](const Eigen::Vector3d& p) {
+    return Eigen::Vector3d(0.5 + 0.5 * p.x(), 0.5 + 0.4 * p.y(), 0.25 * p.z() - 0.1);
+  };
+  for (const Eigen::Vector3f& v : tri.vertices) tri.colors_bgr.push_back(colour_of(v.cast<double>()).cast<float>());
+  RenderOptions options;
+  options.cull_back_faces = false;
+  RenderBuffers out;
+  Render(tri, cam, Rigid3d(), cam.ImageRect(), options, &out);
+  const Eigen::Vector3d a = tri.vertices[0].cast<double>();
+  const Eigen::Vector3d n =
+      (tri.vertices[1].cast<double>() - a).cross(tri.vertices[2].cast<double>() - a).normalized();
+  int covered = 0;
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
+      if (!out.mask.at<uint8_t>(v, u)) continue;
+      ++covered;
+      auto colour_at = [&](double pu, double pv) {
+        return colour_of(cam.Unproject(Eigen::Vector2d(pu, pv), PlaneDepth(cam, pu, pv, n, n.dot(a))));
+      };
+      const Eigen::Vector3d want = colour_at(u, v);
+      // Rounding plus snapping vertices to 1/256 px.
+      const Eigen::Vector3d tolerance =
+          1e-5 + ((colour_at(u + 1, v) - want).cwiseAbs() + (colour_at(u, v + 1) - want).cwiseAbs()).array() / 256.0;
+      const cv::Vec3f got = out.color.at<cv::Vec3f>(v, u);
+      for (int k = 0; k < 3; ++k) ASSERT_NEAR(got[k], want[k], tolerance[k]) << u << " " << v;
+    }
+  }
+  EXPECT_GT(covered, 1000);
+}
+
+TEST(Rasterizer, ProjectiveTextureFromTheRenderingCameraReproducesTheImage) {
+  const PinholeCamera cam = TestCamera();
+  const Rigid3d cam_from_obj =
+      Pose(Eigen::Vector3d(0.1, -0.2, 0.05), Eigen::Vector3d(0.02, 0.01, 1.0));
+  // A tilted quad in the object frame, in view.
+  Mesh quad = MakeQuad({{-0.3f, -0.25f, 0.1f}, {-0.3f, 0.25f, 0.0f}, {0.3f, 0.25f, -0.1f},
+                        {0.3f, -0.25f, 0.0f}});
+  Projector projector;
+  projector.camera = cam;
+  projector.cam_from_obj = cam_from_obj;
+  projector.image = RandomTexture(cam.width, cam.height, 11);
+  quad.projectors = {projector};
+  RenderOptions options;
+  options.cull_back_faces = false;
+  RenderBuffers out;
+  Render(quad, cam, cam_from_obj, cam.ImageRect(), options, &out);
+  int covered = 0;
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
+      if (!out.mask.at<uint8_t>(v, u)) continue;
+      ++covered;
+      const cv::Vec3f got = out.color.at<cv::Vec3f>(v, u);
+      ASSERT_LT(cv::norm(got - projector.image.at<cv::Vec3f>(v, u)), 0.012) << u << " " << v;
+    }
+  }
+  EXPECT_GT(covered, 2000);
+
+  // A projector that sees only the left half of the image: the rest falls back to the
+  // material colour.
+  quad.projectors[0].camera.width = cam.width / 2;
+  quad.projectors[0].image = projector.image(cv::Rect(0, 0, cam.width / 2, cam.height)).clone();
+  Material grey;
+  grey.diffuse_bgr = Eigen::Vector3f::Constant(0.5f);
+  quad.materials = {grey};
+  Render(quad, cam, cam_from_obj, cam.ImageRect(), options, &out);
+  int fallback = 0;
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
+      if (!out.mask.at<uint8_t>(v, u)) continue;
+      const cv::Vec3f got = out.color.at<cv::Vec3f>(v, u);
+      if (u <= cam.width / 2 - 2) {
+        ASSERT_LT(cv::norm(got - projector.image.at<cv::Vec3f>(v, u)), 0.012) << u << " " << v;
+      } else if (u >= cam.width / 2 + 1) {
+        ASSERT_EQ(got, cv::Vec3f(0.5f, 0.5f, 0.5f)) << u << " " << v;
+        ++fallback;
+      }
+    }
+  }
+  EXPECT_GT(fallback, 500);
+}
+
+TEST(Rasterizer, NormalsAreInTheCameraFrame) {
+  const PinholeCamera cam = TestCamera();
+  const Rigid3d pose = Pose(Eigen::Vector3d(0.0, 0.4, 0.0), Eigen::Vector3d(0, 0, 1.0));
+  // Quad in the object's z = 0 plane facing -z (counter-clockwise seen from -z).
+  Mesh quad = MakeQuad({{-0.2f, -0.2f, 0}, {-0.2f, 0.2f, 0}, {0.2f, 0.2f, 0}, {0.2f, -0.2f, 0}});
+  RenderOptions options;
+  options.write_normals = true;
+  RenderBuffers out;
+  Render(quad, cam, pose, cam.ImageRect(), options, &out);
+  const Eigen::Vector3d want = pose.rotation() * Eigen::Vector3d(0, 0, -1);
+  ASSERT_EQ(out.mask.at<uint8_t>(60, 80), 255);
+  const cv::Vec3f got = out.normal.at<cv::Vec3f>(60, 80);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[k], want[k], 1e-5);
+  EXPECT_EQ(out.normal.at<cv::Vec3f>(0, 0), cv::Vec3f(0, 0, 0));
+}
+
+void ExpectErrorMentioning(const std::function<void()>& f, const std::string& text) {
+  try {
+    f();
+    ADD_FAILURE() << "no unseen::Error thrown; expected one mentioning '" << text << "'";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), testing::HasSubstr(text));
+  }
+}
+
+TEST(Rasterizer, BadInputThrows) {
+  const PinholeCamera cam = TestCamera();
+  const Mesh good = MakeCube(0.2f);
+  const Rigid3d pose(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, 0, 1));
+  RenderBuffers out;
+  auto render = [&](const Mesh& m, const PinholeCamera& c, const Rigid3d& p,
+                    const RenderOptions& o) {
+    return [&, m, c, p, o] { Render(m, c, p, c.ImageRect(), o, &out); };
+  };
+  const RenderOptions options;
+  EXPECT_NO_THROW(render(good, cam, pose, options)());
+
+  Mesh m = good;
+  m.triangles.clear();
+  ExpectErrorMentioning(render(m, cam, pose, options), "no triangles");
+  m = good;
+  m.triangles[3][1] = 8;
+  ExpectErrorMentioning(render(m, cam, pose, options), "triangle 3");
+  m = good;
+  m.triangles[0][0] = -1;
+  ExpectErrorMentioning(render(m, cam, pose, options), "triangle 0");
+  m = good;
+  m.vertices[5].y() = std::nanf("");
+  ExpectErrorMentioning(render(m, cam, pose, options), "vertex 5");
+  m = good;
+  m.uvs.resize(3);
+  ExpectErrorMentioning(render(m, cam, pose, options), "3 uvs");
+  m = good;
+  m.colors_bgr.resize(9);
+  ExpectErrorMentioning(render(m, cam, pose, options), "9 colours");
+  m = good;
+  m.triangle_materials.assign(m.triangles.size(), 2);
+  m.materials.resize(1);
+  ExpectErrorMentioning(render(m, cam, pose, options), "material 2");
+  m = good;
+  m.materials.resize(1);
+  m.materials[0].texture = cv::Mat(4, 4, CV_8UC3);
+  ExpectErrorMentioning(render(m, cam, pose, options), "CV_32FC3");
+  m = good;
+  m.projectors.resize(1);
+  ExpectErrorMentioning(render(m, cam, pose, options), "projector 0");
+
+  PinholeCamera bad_cam = cam;
+  bad_cam.fx = 0;
+  ExpectErrorMentioning(render(good, bad_cam, pose, options), "fx=0");
+  bad_cam = cam;
+  bad_cam.width = -5;
+  ExpectErrorMentioning(render(good, bad_cam, pose, options), "-5");
+  bad_cam = cam;
+  bad_cam.width = 100000;
+  ExpectErrorMentioning(render(good, bad_cam, pose, options), "100000");
+
+  RenderOptions bad_options;
+  bad_options.near_m = 0;
+  ExpectErrorMentioning(render(good, cam, pose, bad_options), "near_m");
+  Rigid3d bad_pose = pose;
+  bad_pose.set_translation(Eigen::Vector3d(0, std::nan(""), 1));
+  ExpectErrorMentioning(render(good, cam, bad_pose, options), "cam_from_obj");
+  EXPECT_THROW(Render(good, cam, pose, cam.ImageRect(), options, nullptr), Error);
+}
+
+}  // namespace
+}  // namespace unseen
