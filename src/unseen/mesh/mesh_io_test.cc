@@ -1,0 +1,701 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/mesh/mesh_io.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "unseen/image/image_io.h"
+#include "unseen/mesh/primitives.h"
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kSequences = std::string(UNSEEN_SOURCE_DIR) + "/../shared/data/sequences";
+
+// A fresh folder per test, removed afterwards.
+class MeshIoTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("unseen_mesh_io_" + std::string(info->name()) + "_" + std::to_string(getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string Write(const std::string& name, const std::string& text) const {
+    std::ofstream(Path(name), std::ios::binary) << text;
+    return Path(name);
+  }
+
+  fs::path dir_;
+};
+
+// An 8x8 texture whose top half (image rows 0-3) is red and bottom half blue.
+cv::Mat TopRedBottomBlue() {
+  cv::Mat image(8, 8, CV_8UC3, cv::Scalar(255, 0, 0));  // BGR blue
+  image.rowRange(0, 4).setTo(cv::Scalar(0, 0, 255));    // red
+  return image;
+}
+
+bool IsRed(const cv::Vec3f& c) { return c[2] > 0.9f && c[0] < 0.1f && c[1] < 0.1f; }
+bool IsBlue(const cv::Vec3f& c) { return c[0] > 0.9f && c[2] < 0.1f && c[1] < 0.1f; }
+
+// Bilinear texture lookup with the OBJ convention: column u * cols, row (1 - v) * rows.
+cv::Vec3f SampleUv(const cv::Mat& texture, const Eigen::Vector2f& uv) {
+  const float x = uv.x() * texture.cols - 0.5f;
+  const float y = (1.0f - uv.y()) * texture.rows - 0.5f;
+  const int x0 = std::clamp(static_cast<int>(std::floor(x)), 0, texture.cols - 1);
+  const int y0 = std::clamp(static_cast<int>(std::floor(y)), 0, texture.rows - 1);
+  const int x1 = std::min(x0 + 1, texture.cols - 1);
+  const int y1 = std::min(y0 + 1, texture.rows - 1);
+  const float fx = std::clamp(x - x0, 0.0f, 1.0f);
+  const float fy = std::clamp(y - y0, 0.0f, 1.0f);
+  return (1 - fy) * ((1 - fx) * texture.at<cv::Vec3f>(y0, x0) + fx * texture.at<cv::Vec3f>(y0, x1)) +
+         fy * ((1 - fx) * texture.at<cv::Vec3f>(y1, x0) + fx * texture.at<cv::Vec3f>(y1, x1));
+}
+
+// The colour the renderer would show at barycentric point `bary` of triangle t (texture,
+// else vertex colour, else material colour).
+cv::Vec3f SurfaceColour(const Mesh& mesh, int t, const Eigen::Vector3f& bary) {
+  const Eigen::Vector3i& tri = mesh.triangles[t];
+  const int m = mesh.triangle_materials.empty() ? 0 : mesh.triangle_materials[t];
+  if (!mesh.uvs.empty() && !mesh.materials[m].texture.empty()) {
+    const Eigen::Vector2f uv =
+        bary[0] * mesh.uvs[tri[0]] + bary[1] * mesh.uvs[tri[1]] + bary[2] * mesh.uvs[tri[2]];
+    return SampleUv(mesh.materials[m].texture, uv);
+  }
+  if (!mesh.colors_bgr.empty()) {
+    const Eigen::Vector3f c = bary[0] * mesh.colors_bgr[tri[0]] +
+                              bary[1] * mesh.colors_bgr[tri[1]] + bary[2] * mesh.colors_bgr[tri[2]];
+    return {c[0], c[1], c[2]};
+  }
+  const Eigen::Vector3f& d = mesh.materials[m].diffuse_bgr;
+  return {d[0], d[1], d[2]};
+}
+
+// Triangle whose three vertices match `other`'s triangle t in position (same order).
+int FindTriangle(const Mesh& mesh, const Mesh& other, int t, float tolerance) {
+  for (int s = 0; s < mesh.num_triangles(); ++s) {
+    bool same = true;
+    for (int k = 0; k < 3 && same; ++k) {
+      same = (mesh.vertices[mesh.triangles[s][k]] - other.vertices[other.triangles[t][k]])
+                 .norm() < tolerance;
+    }
+    if (same) return s;
+  }
+  return -1;
+}
+
+// Same triangles (same winding) and the same surface colour at several points of each.
+void ExpectSameAppearance(const Mesh& expected, const Mesh& actual, float colour_tolerance) {
+  ASSERT_EQ(expected.num_triangles(), actual.num_triangles());
+  const Eigen::Vector3f points[] = {{1 / 3.f, 1 / 3.f, 1 / 3.f},
+                                    {0.7f, 0.2f, 0.1f},
+                                    {0.1f, 0.7f, 0.2f},
+                                    {0.2f, 0.1f, 0.7f}};
+  for (int t = 0; t < expected.num_triangles(); ++t) {
+    const int s = FindTriangle(actual, expected, t, 1e-5f);
+    ASSERT_GE(s, 0) << "triangle " << t << " not found";
+    for (const Eigen::Vector3f& bary : points) {
+      const cv::Vec3f a = SurfaceColour(expected, t, bary);
+      const cv::Vec3f b = SurfaceColour(actual, s, bary);
+      EXPECT_LT(cv::norm(a - b), colour_tolerance) << "triangle " << t << " at " << bary.transpose();
+    }
+  }
+}
+
+// Every triangle faces away from the origin (convex objects centred on it).
+void ExpectOutward(const Mesh& mesh) {
+  for (int t = 0; t < mesh.num_triangles(); ++t) {
+    const Eigen::Vector3i& tri = mesh.triangles[t];
+    const Eigen::Vector3f& a = mesh.vertices[tri[0]];
+    const Eigen::Vector3f n = (mesh.vertices[tri[1]] - a).cross(mesh.vertices[tri[2]] - a);
+    EXPECT_GT(n.dot(a + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]), 0.0f) << "triangle " << t;
+  }
+}
+
+void ExpectThrowsMentioning(const std::function<void()>& f, const std::vector<std::string>& words) {
+  try {
+    f();
+    ADD_FAILURE() << "no unseen::Error thrown";
+  } catch (const Error& e) {
+    for (const std::string& w : words) {
+      EXPECT_NE(std::string(e.what()).find(w), std::string::npos)
+          << "message '" << e.what() << "' does not mention '" << w << "'";
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Development sequence models (Blender OBJ exports, millimetres).
+
+std::string DevModel(const std::string& sequence) {
+  return kSequences + "/" + sequence + "/models/obj_000001.obj";
+}
+
+TEST(DevModels, CubesLoadInMetres) {
+  int loaded = 0;
+  for (const char* sequence : {"cube_white_zigzag", "cube_clutter_sidelight", "rig5_cube_fig312"}) {
+    const std::string path = DevModel(sequence);
+    if (!fs::exists(path)) continue;
+    ++loaded;
+    const Mesh cube = LoadMesh(path, 0.001);
+    EXPECT_EQ(cube.num_triangles(), 12) << path;
+    Eigen::Vector3f lo, hi;
+    cube.BoundingBox(&lo, &hi);
+    EXPECT_LT((lo - Eigen::Vector3f::Constant(-0.048f)).norm(), 1e-6f) << path;
+    EXPECT_LT((hi - Eigen::Vector3f::Constant(0.048f)).norm(), 1e-6f) << path;
+    ASSERT_EQ(cube.materials.size(), 6u) << path;
+    for (const Material& m : cube.materials) {
+      EXPECT_FALSE(m.texture.empty()) << m.name;
+      EXPECT_EQ(m.texture.type(), CV_32FC3);
+      EXPECT_EQ(m.texture.size(), cv::Size(256, 256));
+      // The texture is the file as it is (not flipped): compare with a direct load.
+      const cv::Mat direct = LoadColorImage(kSequences + "/" + sequence + "/models/" + m.texture_path);
+      EXPECT_EQ(cv::norm(direct, m.texture, cv::NORM_INF), 0.0) << m.texture_path;
+    }
+    ASSERT_EQ(cube.uvs.size(), cube.vertices.size());
+    for (const Eigen::Vector2f& uv : cube.uvs) {
+      EXPECT_TRUE((uv.array() >= 0.0f).all() && (uv.array() <= 1.0f).all());
+    }
+    EXPECT_TRUE(cube.HasUvTexture());
+    ExpectOutward(cube);
+    Eigen::Vector3f centre;
+    float radius;
+    cube.BoundingSphere(&centre, &radius);
+    EXPECT_NEAR(radius, 0.048f * std::sqrt(3.0f), 1e-5f);
+  }
+  if (loaded == 0) GTEST_SKIP() << "development sequences not found in " << kSequences;
+}
+
+TEST(DevModels, SphereAndBox) {
+  const std::string sphere_path = DevModel("sphere_clutter_spin");
+  const std::string box_path = DevModel("box_occluded_bar");
+  if (!fs::exists(sphere_path) && !fs::exists(box_path)) GTEST_SKIP() << "no dev sequences";
+  if (fs::exists(sphere_path)) {
+    const Mesh sphere = LoadMesh(sphere_path, 0.001);
+    Eigen::Vector3f centre;
+    float radius;
+    sphere.BoundingSphere(&centre, &radius);
+    EXPECT_LT(centre.norm(), 1e-3f);
+    EXPECT_NEAR(radius, 0.060f, 1e-3f);  // models_info.json: diameter 120 mm
+    EXPECT_GT(sphere.num_triangles(), 500);
+    EXPECT_TRUE(sphere.HasUvTexture());
+    ExpectOutward(sphere);
+  }
+  if (fs::exists(box_path)) {
+    const Mesh box = LoadMesh(box_path, 0.001);
+    EXPECT_EQ(box.num_triangles(), 12);
+    Eigen::Vector3f lo, hi;
+    box.BoundingBox(&lo, &hi);
+    EXPECT_LT((hi - Eigen::Vector3f(0.08f, 0.05f, 0.03f)).norm(), 1e-6f);
+    EXPECT_LT((lo + Eigen::Vector3f(0.08f, 0.05f, 0.03f)).norm(), 1e-6f);
+    EXPECT_EQ(box.materials.size(), 6u);
+    EXPECT_TRUE(box.HasUvTexture());
+    ExpectOutward(box);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// OBJ
+
+// A unit quad in the z = 0 plane facing +z; vt (0, 0) at the bottom-left corner.
+const char* kQuadObj = R"(mtllib quad.mtl
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1
+usemtl tex
+f 1/1 2/2 3/3
+f 1/1 3/3 4/4
+)";
+
+TEST_F(MeshIoTest, ObjTextureIsRightWayUp) {
+  cv::imwrite(Path("quad.png"), TopRedBottomBlue());
+  Write("quad.mtl", "newmtl tex\nKd 1 1 1\nmap_Kd quad.png\n");
+  const Mesh mesh = LoadMesh(Write("quad.obj", kQuadObj));
+  ASSERT_EQ(mesh.num_triangles(), 2);
+  ASSERT_EQ(mesh.materials.size(), 1u);
+  EXPECT_EQ(mesh.materials[0].name, "tex");
+  EXPECT_EQ(mesh.materials[0].texture_path, "quad.png");
+  ASSERT_TRUE(mesh.HasUvTexture());
+  // The top of the quad (y = 1) shows the top of the image (red), the bottom blue.
+  for (int t = 0; t < 2; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const int v = mesh.triangles[t][k];
+      const cv::Vec3f c = SampleUv(mesh.materials[0].texture, mesh.uvs[v]);
+      if (mesh.vertices[v].y() > 0.5f) {
+        EXPECT_TRUE(IsRed(c)) << c;
+      } else {
+        EXPECT_TRUE(IsBlue(c)) << c;
+      }
+    }
+  }
+  // Counter-clockwise seen from +z is kept.
+  const Eigen::Vector3i& tri = mesh.triangles[0];
+  const Eigen::Vector3f n = (mesh.vertices[tri[1]] - mesh.vertices[tri[0]])
+                                .cross(mesh.vertices[tri[2]] - mesh.vertices[tri[0]]);
+  EXPECT_GT(n.z(), 0.0f);
+}
+
+TEST_F(MeshIoTest, ObjDiffuseColoursMergeSubMeshesAndScale) {
+  Write("two.mtl", "newmtl red\nKd 1 0 0\nnewmtl green\nKd 0 1 0\nnewmtl unused\nKd 0 0 1\n");
+  const Mesh mesh = LoadMesh(Write("two.obj", R"(mtllib two.mtl
+o first
+v 0 0 0
+v 10 0 0
+v 0 10 0
+v 0 0 10
+usemtl red
+f 1 2 3
+o second
+usemtl green
+f 1 3 4
+f 1 4 2
+)"), 0.001);
+  EXPECT_EQ(mesh.num_triangles(), 3);
+  ASSERT_EQ(mesh.materials.size(), 2u);  // only the used ones
+  Eigen::Vector3f lo, hi;
+  mesh.BoundingBox(&lo, &hi);
+  EXPECT_TRUE(hi.isApprox(Eigen::Vector3f(0.01f, 0.01f, 0.01f)));
+  int red = 0, green = 0;
+  for (int t = 0; t < mesh.num_triangles(); ++t) {
+    const Eigen::Vector3f& d = mesh.materials[mesh.triangle_materials[t]].diffuse_bgr;
+    red += d.isApprox(Eigen::Vector3f(0, 0, 1));
+    green += d.isApprox(Eigen::Vector3f(0, 1, 0));
+  }
+  EXPECT_EQ(red, 1);
+  EXPECT_EQ(green, 2);
+  EXPECT_FALSE(mesh.HasUvTexture());
+}
+
+TEST_F(MeshIoTest, ObjQuadsAreTriangulated) {
+  const Mesh mesh = LoadMesh(Write("q.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n"));
+  EXPECT_EQ(mesh.num_triangles(), 2);
+  EXPECT_NO_THROW(mesh.Check());
+}
+
+TEST_F(MeshIoTest, ObjMissingTextureNamesBothFiles) {
+  Write("quad.mtl", "newmtl tex\nKd 1 1 1\nmap_Kd no_such_texture.png\n");
+  const std::string path = Write("quad.obj", kQuadObj);
+  ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "no_such_texture.png"});
+}
+
+// ---------------------------------------------------------------------------------------
+// PLY
+
+TEST_F(MeshIoTest, PlyVertexColours) {
+  const Mesh mesh = LoadMesh(Write("tet.ply", R"(ply
+format ascii 1.0
+element vertex 4
+property float x
+property float y
+property float z
+property uchar red
+property uchar green
+property uchar blue
+element face 4
+property list uchar int vertex_indices
+end_header
+0 0 0 255 0 0
+1 0 0 0 255 0
+0 1 0 0 0 255
+0 0 1 255 255 255
+3 0 2 1
+3 0 1 3
+3 0 3 2
+3 1 2 3
+)"));
+  EXPECT_EQ(mesh.num_triangles(), 4);
+  ASSERT_EQ(mesh.colors_bgr.size(), mesh.vertices.size());
+  EXPECT_FALSE(mesh.HasUvTexture());
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const Eigen::Vector3f& p = mesh.vertices[v];
+    Eigen::Vector3f expected(1, 1, 1);
+    if (p.isApprox(Eigen::Vector3f(0, 0, 0))) expected = {0, 0, 1};  // red, BGR
+    if (p.isApprox(Eigen::Vector3f(1, 0, 0))) expected = {0, 1, 0};
+    if (p.isApprox(Eigen::Vector3f(0, 1, 0))) expected = {1, 0, 0};
+    EXPECT_TRUE(mesh.colors_bgr[v].isApprox(expected, 1e-3f))
+        << p.transpose() << ": " << mesh.colors_bgr[v].transpose();
+  }
+  // Tetrahedron with outward winding in the file stays outward.
+  const Eigen::Vector3f inside(0.2f, 0.2f, 0.2f);
+  for (const Eigen::Vector3i& tri : mesh.triangles) {
+    const Eigen::Vector3f& a = mesh.vertices[tri[0]];
+    const Eigen::Vector3f n = (mesh.vertices[tri[1]] - a).cross(mesh.vertices[tri[2]] - a);
+    EXPECT_GT(n.dot(a - inside), 0.0f);
+  }
+}
+
+std::string TexturedPlyText(const std::string& u_name, const std::string& v_name,
+                            const std::string& texture) {
+  return "ply\nformat ascii 1.0\ncomment TextureFile " + texture +
+         "\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+         "property float " + u_name + "\nproperty float " + v_name +
+         "\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
+         "0 0 0 0 0\n1 0 0 1 0\n1 1 0 1 1\n0 1 0 0 1\n3 0 1 2\n3 0 2 3\n";
+}
+
+TEST_F(MeshIoTest, PlyTextureFileComment) {
+  cv::imwrite(Path("tex.png"), TopRedBottomBlue());
+  for (const auto& [u, v] : {std::pair{"texture_u", "texture_v"}, std::pair{"s", "t"}}) {
+    const Mesh mesh = LoadMesh(Write(std::string("bop_") + u + ".ply", TexturedPlyText(u, v, "tex.png")));
+    ASSERT_TRUE(mesh.HasUvTexture()) << u;
+    EXPECT_EQ(mesh.materials[0].texture_path, "tex.png");
+    for (int t = 0; t < mesh.num_triangles(); ++t) {
+      const cv::Vec3f c = SurfaceColour(mesh, t, {0.34f, 0.33f, 0.33f});
+      const float y = (mesh.vertices[mesh.triangles[t][0]] + mesh.vertices[mesh.triangles[t][1]] +
+                       mesh.vertices[mesh.triangles[t][2]]).y() / 3.0f;
+      EXPECT_TRUE(y > 0.5f ? IsRed(c) : IsBlue(c)) << u << " triangle " << t << " " << c;
+    }
+  }
+}
+
+TEST_F(MeshIoTest, PlyMissingTextureNamesBothFiles) {
+  const std::string path = Write("m.ply", TexturedPlyText("texture_u", "texture_v", "gone.png"));
+  ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "gone.png"});
+}
+
+const char* kPlyHeader3 = R"(ply
+format ascii 1.0
+element vertex 3
+property float x
+property float y
+property float z
+)";
+
+TEST_F(MeshIoTest, BadInputThrowsNamingTheFile) {
+  const std::string missing = Path("does_not_exist.obj");
+  ExpectThrowsMentioning([&] { LoadMesh(missing); }, {missing, "not found"});
+
+  const std::string garbage = Write("garbage.ply", "this is not a mesh\n\x01\x02\x03");
+  ExpectThrowsMentioning([&] { LoadMesh(garbage); }, {garbage});
+  const std::string garbage_obj = Write("garbage.obj", std::string(1000, '\x07'));
+  ExpectThrowsMentioning([&] { LoadMesh(garbage_obj); }, {garbage_obj});
+
+  const std::string out_of_range = Write(
+      "range.ply", std::string(kPlyHeader3) +
+                       "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                       "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
+  ExpectThrowsMentioning([&] { LoadMesh(out_of_range); }, {out_of_range});
+
+  const std::string nan_vertex = Write(
+      "nan.ply", std::string(kPlyHeader3) +
+                     "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                     "0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n");
+  ExpectThrowsMentioning([&] { LoadMesh(nan_vertex); }, {nan_vertex});
+
+  const std::string no_faces = Write(
+      "nofaces.ply", std::string(kPlyHeader3) + "end_header\n0 0 0\n1 0 0\n0 1 0\n");
+  ExpectThrowsMentioning([&] { LoadMesh(no_faces); }, {no_faces});
+  const std::string obj_no_faces = Write("nofaces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+  ExpectThrowsMentioning([&] { LoadMesh(obj_no_faces); }, {obj_no_faces});
+
+  // Face lists without counts (a classic hand-written mistake): faces with no indices.
+  const std::string no_counts = Write(
+      "nocounts.ply", std::string(kPlyHeader3) +
+                          "element face 2\nproperty list uchar int vertex_indices\nend_header\n"
+                          "0 0 0\n1 0 0\n0 1 0\n0 1 2\n0 2 1\n");
+  ExpectThrowsMentioning([&] { LoadMesh(no_counts); }, {no_counts});
+
+  const std::string empty = Write("empty.obj", "");
+  ExpectThrowsMentioning([&] { LoadMesh(empty); }, {empty});
+
+  const std::string good = Write("good.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_NO_THROW(LoadMesh(good));
+  EXPECT_THROW(LoadMesh(good, 0.0), Error);
+  EXPECT_THROW(LoadMesh(good, std::nan("")), Error);
+}
+
+TEST_F(MeshIoTest, NanVertexInObj) {
+  const std::string path = Write("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
+  ExpectThrowsMentioning([&] { LoadMesh(path); }, {path});
+}
+
+// ---------------------------------------------------------------------------------------
+// glTF 2 and Collada
+
+std::string Base64(const std::vector<unsigned char>& bytes) {
+  static const char* kTable = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  size_t i = 0;
+  for (; i + 2 < bytes.size(); i += 3) {
+    const unsigned n = (bytes[i] << 16) | (bytes[i + 1] << 8) | bytes[i + 2];
+    for (int k = 3; k >= 0; --k) out.push_back(kTable[(n >> (6 * k)) & 63]);
+  }
+  if (i + 1 == bytes.size()) {
+    const unsigned n = bytes[i] << 16;
+    out += {kTable[(n >> 18) & 63], kTable[(n >> 12) & 63], '=', '='};
+  } else if (i + 2 == bytes.size()) {
+    const unsigned n = (bytes[i] << 16) | (bytes[i + 1] << 8);
+    out += {kTable[(n >> 18) & 63], kTable[(n >> 12) & 63], kTable[(n >> 6) & 63], '='};
+  }
+  return out;
+}
+
+template <typename T>
+void Append(std::vector<unsigned char>* bytes, const std::vector<T>& values) {
+  const auto* p = reinterpret_cast<const unsigned char*>(values.data());
+  bytes->insert(bytes->end(), p, p + values.size() * sizeof(T));
+}
+
+// A textured unit quad (z = 0, facing +z) in glTF 2 with every buffer and the PNG
+// embedded as data URIs, under a node translated by (5, 0, 0). glTF texture coordinates
+// have (0, 0) at the top-left of the image: the top of the quad gets v = 0.
+std::string QuadGltf(const std::string& image_uri) {
+  const std::vector<float> positions = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+  const std::vector<float> uvs = {0, 1, 1, 1, 1, 0, 0, 0};
+  const std::vector<uint16_t> indices = {0, 1, 2, 0, 2, 3};
+  std::vector<unsigned char> buffer;
+  Append(&buffer, positions);  // 48 bytes
+  Append(&buffer, uvs);        // 32 bytes
+  Append(&buffer, indices);    // 12 bytes
+  return R"({"asset": {"version": "2.0"},
+  "scene": 0, "scenes": [{"nodes": [0]}],
+  "nodes": [{"mesh": 0, "translation": [5, 0, 0]}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2,
+                              "material": 0}]}],
+  "materials": [{"name": "painted", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+  "textures": [{"source": 0}],
+  "images": [{"uri": ")" + image_uri + R"("}],
+  "buffers": [{"byteLength": 92, "uri": "data:application/octet-stream;base64,)" +
+         Base64(buffer) + R"("}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                  {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+                  {"buffer": 0, "byteOffset": 80, "byteLength": 12}],
+  "accessors": [
+    {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+     "min": [0, 0, 0], "max": [1, 1, 0]},
+    {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+    {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}]
+})";
+}
+
+void ExpectQuadTopRed(const Mesh& mesh, float x_offset) {
+  ASSERT_EQ(mesh.num_triangles(), 2);
+  ASSERT_TRUE(mesh.HasUvTexture());
+  Eigen::Vector3f lo, hi;
+  mesh.BoundingBox(&lo, &hi);
+  EXPECT_TRUE(lo.isApprox(Eigen::Vector3f(x_offset, 0, 0))) << lo.transpose();
+  for (int t = 0; t < mesh.num_triangles(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const int v = mesh.triangles[t][k];
+      const cv::Vec3f c =
+          SampleUv(mesh.materials[mesh.triangle_materials[t]].texture, mesh.uvs[v]);
+      EXPECT_TRUE(mesh.vertices[v].y() > 0.5f ? IsRed(c) : IsBlue(c)) << mesh.vertices[v] << c;
+    }
+  }
+}
+
+TEST_F(MeshIoTest, GltfEmbeddedTextureAndNodeTransform) {
+  std::vector<unsigned char> png;
+  cv::imencode(".png", TopRedBottomBlue(), png);
+  const Mesh mesh =
+      LoadMesh(Write("quad.gltf", QuadGltf("data:image/png;base64," + Base64(png))));
+  ExpectQuadTopRed(mesh, 5.0f);
+  EXPECT_EQ(mesh.materials[0].name, "painted");
+}
+
+TEST_F(MeshIoTest, GltfExternalTexture) {
+  cv::imwrite(Path("quad texture.png"), TopRedBottomBlue());
+  const Mesh mesh = LoadMesh(Write("quad.gltf", QuadGltf("quad%20texture.png")));
+  ExpectQuadTopRed(mesh, 5.0f);
+}
+
+// Loads `source` with assimp and writes it with assimp's exporter `format_id`.
+void AssimpConvert(const std::string& source, const std::string& format_id,
+                   const std::string& target) {
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(source, aiProcess_Triangulate);
+  ASSERT_NE(scene, nullptr) << importer.GetErrorString();
+  Assimp::Exporter exporter;
+  ASSERT_EQ(exporter.Export(scene, format_id, target), AI_SUCCESS) << exporter.GetErrorString();
+}
+
+TEST_F(MeshIoTest, ColladaAndGlbFromAssimpExporter) {
+  cv::imwrite(Path("quad.png"), TopRedBottomBlue());
+  Write("quad.mtl", "newmtl tex\nKd 1 1 1\nmap_Kd quad.png\n");
+  const std::string obj = Write("quad.obj", kQuadObj);
+  const Mesh reference = LoadMesh(obj);
+  AssimpConvert(obj, "collada", Path("quad.dae"));
+  ExpectSameAppearance(reference, LoadMesh(Path("quad.dae")), 1e-3f);
+  AssimpConvert(obj, "glb2", Path("quad.glb"));
+  ExpectSameAppearance(reference, LoadMesh(Path("quad.glb")), 1e-3f);
+  AssimpConvert(obj, "gltf2", Path("quad2.gltf"));
+  ExpectSameAppearance(reference, LoadMesh(Path("quad2.gltf")), 1e-3f);
+}
+
+// ---------------------------------------------------------------------------------------
+// Saving and loading back
+
+TEST_F(MeshIoTest, LetteredCubeRoundTripsThroughPlyAtlasAndObj) {
+  const Mesh cube = MakeLetteredCube(0.096, 64);
+  for (const char* name : {"cube.ply", "cube.obj"}) {
+    SaveMesh(cube, Path(name), 1000.0);
+    const Mesh loaded = LoadMesh(Path(name), 0.001);
+    SCOPED_TRACE(name);
+    EXPECT_TRUE(loaded.HasUvTexture());
+    Eigen::Vector3f lo, hi;
+    loaded.BoundingBox(&lo, &hi);
+    EXPECT_LT((hi - Eigen::Vector3f::Constant(0.048f)).norm(), 1e-6f);
+    // 8-bit PNG rounding: colours within 1/255 + interpolation slack.
+    ExpectSameAppearance(cube, loaded, 0.02f);
+    ASSERT_EQ(loaded.normals.size(), loaded.vertices.size());
+  }
+  // The PLY holds one texture (an atlas of the six faces) named in its header.
+  std::ifstream ply(Path("cube.ply"), std::ios::binary);
+  std::string header((std::istreambuf_iterator<char>(ply)), {});
+  EXPECT_NE(header.find("comment TextureFile cube.png"), std::string::npos);
+  EXPECT_TRUE(fs::exists(Path("cube.png")));
+  // The OBJ keeps six materials with their names.
+  const Mesh obj = LoadMesh(Path("cube.obj"));
+  ASSERT_EQ(obj.materials.size(), 6u);
+  EXPECT_EQ(obj.materials[0].name, "face_A");
+}
+
+TEST_F(MeshIoTest, SphereRoundTripKeepsRepeatingUvsInPly) {
+  Mesh sphere = MakeTexturedSphere(0.03, 6, 12);
+  for (Eigen::Vector2f& uv : sphere.uvs) uv.x() *= 2.0f;  // texture repeated twice around
+  SaveMesh(sphere, Path("s.ply"));
+  const Mesh loaded = LoadMesh(Path("s.ply"));
+  ExpectSameAppearance(sphere, loaded, 0.02f);
+  // The same uvs cannot be packed into an atlas with other materials.
+  sphere.materials.push_back(sphere.materials[0]);
+  sphere.triangle_materials[0] = 1;
+  ExpectThrowsMentioning([&] { SaveMesh(sphere, Path("t.ply")); }, {"t.ply", "outside [0, 1]"});
+  EXPECT_NO_THROW(SaveMesh(sphere, Path("t.obj")));
+}
+
+Mesh ColouredTetrahedron() {
+  Mesh mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  mesh.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  mesh.colors_bgr = {{0, 0, 1}, {0, 1, 0}, {1, 0, 0}, {0.2f, 0.4f, 0.6f}};
+  return mesh;
+}
+
+TEST_F(MeshIoTest, VertexColoursRoundTrip) {
+  const Mesh mesh = ColouredTetrahedron();
+  for (const char* name : {"tet.ply", "tet.obj"}) {
+    SaveMesh(mesh, Path(name), 1000.0);
+    const Mesh loaded = LoadMesh(Path(name), 0.001);
+    SCOPED_TRACE(name);
+    ASSERT_FALSE(loaded.colors_bgr.empty());
+    ExpectSameAppearance(mesh, loaded, 0.01f);
+  }
+}
+
+TEST_F(MeshIoTest, MaterialColoursBecomeVertexColoursInPly) {
+  Mesh mesh = ColouredTetrahedron();
+  mesh.colors_bgr.clear();
+  mesh.materials.resize(2);
+  mesh.materials[0].diffuse_bgr = {0, 0, 1};
+  mesh.materials[1].diffuse_bgr = {0, 1, 0};
+  mesh.triangle_materials = {0, 1, 1, 0};
+  SaveMesh(mesh, Path("m.ply"));
+  ExpectSameAppearance(mesh, LoadMesh(Path("m.ply")), 0.01f);
+  SaveMesh(mesh, Path("m.obj"));
+  ExpectSameAppearance(mesh, LoadMesh(Path("m.obj")), 0.01f);
+}
+
+TEST_F(MeshIoTest, ProjectorsRoundTrip) {
+  Mesh mesh = ColouredTetrahedron();
+  for (int i = 0; i < 2; ++i) {
+    Projector p;
+    p.camera.width = 40 + i;
+    p.camera.height = 30;
+    p.camera.fx = 50.0 + i;
+    p.camera.fy = 51.0;
+    p.camera.cx = 19.5;
+    p.camera.cy = 14.5 + i;
+    if (i == 1) p.camera.distortion = {0.1, -0.01, 0.001, 0.002, 0.0};
+    p.cam_from_obj = Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.3 + i, Eigen::Vector3d(1, 2, 3).normalized())),
+                             Eigen::Vector3d(0.01, -0.02, 0.3 + i));
+    p.image = cv::Mat(p.camera.height, p.camera.width, CV_32FC3);
+    cv::randu(p.image, 0.0, 1.0);
+    mesh.projectors.push_back(p);
+  }
+  for (const char* name : {"proj.ply", "proj.obj"}) {
+    SCOPED_TRACE(name);
+    SaveMesh(mesh, Path(name), 1000.0);
+    EXPECT_TRUE(fs::exists(Path(fs::path(name).stem().string() + "_projectors.json")));
+    const Mesh loaded = LoadMesh(Path(name), 0.001);
+    ASSERT_EQ(loaded.projectors.size(), 2u);
+    for (int i = 0; i < 2; ++i) {
+      const Projector& a = mesh.projectors[i];
+      const Projector& b = loaded.projectors[i];
+      EXPECT_EQ(a.camera.width, b.camera.width);
+      EXPECT_EQ(a.camera.height, b.camera.height);
+      EXPECT_DOUBLE_EQ(a.camera.fx, b.camera.fx);
+      EXPECT_DOUBLE_EQ(a.camera.cy, b.camera.cy);
+      EXPECT_EQ(a.camera.distortion, b.camera.distortion);
+      const PoseDifference d = Difference(a.cam_from_obj, b.cam_from_obj);
+      EXPECT_LT(d.translation, 1e-7);
+      EXPECT_LT(d.rotation_rad, 1e-9);
+      EXPECT_LE(cv::norm(a.image, b.image, cv::NORM_INF), 0.5 / 255 + 1e-6);
+    }
+  }
+  // Saving a mesh without projectors removes a stale projector file.
+  mesh.projectors.clear();
+  SaveMesh(mesh, Path("proj.ply"));
+  EXPECT_FALSE(fs::exists(Path("proj_projectors.json")));
+  EXPECT_TRUE(LoadMesh(Path("proj.ply")).projectors.empty());
+}
+
+TEST_F(MeshIoTest, BadProjectorFileThrowsNamingField) {
+  Mesh mesh = ColouredTetrahedron();
+  SaveMesh(mesh, Path("p.ply"));
+  const std::string json_path = Path("p_projectors.json");
+  Write("p_projectors.json", "{ not json");
+  ExpectThrowsMentioning([&] { LoadMesh(Path("p.ply")); }, {json_path, "malformed"});
+  Write("p_projectors.json", R"({"projectors": [{"image": "x.png"}]})");
+  ExpectThrowsMentioning([&] { LoadMesh(Path("p.ply")); }, {json_path, "camera"});
+  Write("p_projectors.json", R"({"projectors": [{"image": "x.png",
+      "camera": {"width": 4, "height": 3, "fx": 5, "fy": 5, "cx": 2, "cy": 1},
+      "cam_from_obj": {"rotation": [[1, 0, 0], [0, 1, 0], [0, 0, 2]], "translation": [0, 0, 1]}}]})");
+  ExpectThrowsMentioning([&] { LoadMesh(Path("p.ply")); }, {json_path, "rotation"});
+  Write("p_projectors.json", R"({"projectors": [{"image": "x.png",
+      "camera": {"width": 4, "height": 3, "fx": 5, "fy": 5, "cx": 2, "cy": 1},
+      "cam_from_obj": {"rotation": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "translation": [0, 0, 1]}}]})");
+  ExpectThrowsMentioning([&] { LoadMesh(Path("p.ply")); }, {json_path, "x.png"});
+}
+
+TEST_F(MeshIoTest, SaveRejectsBadInput) {
+  const Mesh good = ColouredTetrahedron();
+  ExpectThrowsMentioning([&] { SaveMesh(good, Path("m.stl")); }, {"m.stl", ".ply or .obj"});
+  EXPECT_THROW(SaveMesh(good, Path("m.ply"), 0.0), Error);
+  Mesh bad = good;
+  bad.vertices[1].x() = std::numeric_limits<float>::quiet_NaN();
+  ExpectThrowsMentioning([&] { SaveMesh(bad, Path("bad.ply")); }, {"bad.ply", "vertex 1"});
+  EXPECT_THROW(SaveMesh(Mesh(), Path("empty.ply")), Error);
+  // Saving into a folder that does not exist yet creates it.
+  SaveMesh(good, Path("sub/dir/m.ply"));
+  EXPECT_EQ(LoadMesh(Path("sub/dir/m.ply")).num_triangles(), 4);
+}
+
+}  // namespace
+}  // namespace unseen
