@@ -16,15 +16,6 @@ namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 
-const char* StatusName(TrackStatus status) {
-  switch (status) {
-    case TrackStatus::kTracking: return "tracking";
-    case TrackStatus::kLost: return "lost";
-    case TrackStatus::kSearching: return "searching";
-  }
-  return "unknown";
-}
-
 bool IsFinitePositive(double v) { return std::isfinite(v) && v > 0.0; }
 
 // Accumulates mean, RMS and max of non-negative values.
@@ -279,7 +270,7 @@ void WritePerFrameCsv(const std::string& path, const EvaluationResult& result) {
   out << "frame,status,confidence,scored,ex_mm,ey_mm,ez_mm,e_mm,rx_deg,ry_deg,rz_deg,r_deg,"
          "success_5cm5deg,success_2cm2deg\n";
   for (const FrameError& e : result.per_frame) {
-    out << e.frame << ',' << (e.has_pose ? StatusName(e.status) : "missing") << ','
+    out << e.frame << ',' << (e.has_pose ? ToString(e.status) : "missing") << ','
         << fmt::format("{:.4f}", e.confidence) << ',' << int(e.scored) << ',';
     if (e.scored) {
       out << fmt::format("{:.4f},{:.4f},{:.4f},{:.4f},{:.5f},{:.5f},{:.5f},{:.5f},",
