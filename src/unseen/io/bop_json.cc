@@ -34,12 +34,24 @@ nlohmann::json ReadJsonFile(const std::string& path) {
   }
 }
 
-void WriteJsonFile(const std::string& path, const nlohmann::json& json, int indent) {
+namespace {
+
+void WriteText(const std::string& path, const std::string& text) {
   std::ofstream out(path);
   UNSEEN_CHECK(out.good(), "{}: cannot create file", path);
-  out << json.dump(indent) << '\n';
+  out << text << '\n';
   out.close();
   UNSEEN_CHECK(out.good(), "{}: write failed", path);
+}
+
+}  // namespace
+
+void WriteJsonFile(const std::string& path, const nlohmann::json& json, int indent) {
+  WriteText(path, json.dump(indent));
+}
+
+void WriteJsonFile(const std::string& path, const nlohmann::ordered_json& json, int indent) {
+  WriteText(path, json.dump(indent));
 }
 
 int ParseFrameId(const std::string& key, const std::string& what) {

@@ -21,6 +21,8 @@ nlohmann::json ReadJsonFile(const std::string& path);
 
 // Writes `json` to `path` (indented by `indent` spaces, -1 = compact). Throws on failure.
 void WriteJsonFile(const std::string& path, const nlohmann::json& json, int indent = 1);
+// The same keeping the insertion order of keys (frame ids in the order written).
+void WriteJsonFile(const std::string& path, const nlohmann::ordered_json& json, int indent = 1);
 
 // A BOP frame id key ("0", "17", ...) as an int. Throws naming `what` for anything else.
 int ParseFrameId(const std::string& key, const std::string& what);
