@@ -264,6 +264,7 @@ std::vector<Projector> ReadProjectors(const fs::path& json_path) {
 // Throws naming the file for faces without indices, indices out of range and non-finite
 // vertex positions in assimp's raw (not yet post-processed) scene.
 void CheckRawScene(const aiScene& scene, const std::string& path) {
+  bool any_polygon = false;
   for (unsigned mi = 0; mi < scene.mNumMeshes; ++mi) {
     const aiMesh& mesh = *scene.mMeshes[mi];
     UNSEEN_CHECK(mesh.mVertices != nullptr || mesh.mNumVertices == 0,
@@ -278,6 +279,7 @@ void CheckRawScene(const aiScene& scene, const std::string& path) {
       const aiFace& face = mesh.mFaces[f];
       UNSEEN_CHECK(face.mNumIndices > 0 && face.mIndices != nullptr,
                    "{}: face {} of sub-mesh {} has no vertex indices", path, f, mi);
+      any_polygon = any_polygon || face.mNumIndices >= 3;
       for (unsigned k = 0; k < face.mNumIndices; ++k) {
         UNSEEN_CHECK(face.mIndices[k] < mesh.mNumVertices,
                      "{}: face {} of sub-mesh {} has vertex index {} out of range [0, {})", path,
@@ -285,6 +287,7 @@ void CheckRawScene(const aiScene& scene, const std::string& path) {
       }
     }
   }
+  UNSEEN_CHECK(any_polygon, "{}: mesh has no triangles (only points or lines)", path);
 }
 
 // Merges vertices whose position and every attribute are bit-identical (assimp gives
