@@ -18,6 +18,7 @@
 #include <vector>
 
 #include <assimp/Importer.hpp>
+#include <assimp/config.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -683,6 +684,8 @@ Mesh LoadMesh(const std::string& path, double scale_to_metres) {
   UNSEEN_CHECK(fs::is_regular_file(path, ec), "{}: mesh file not found", path);
 
   Assimp::Importer importer;
+  // The object frame is the file's own coordinates: no Collada Z-up -> Y-up rotation.
+  importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
   // Drop points and lines; keep triangles (polygons are triangulated).
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
                               aiPrimitiveType_POINT | aiPrimitiveType_LINE);

@@ -526,6 +526,44 @@ TEST_F(MeshIoTest, GltfExternalTexture) {
   ExpectQuadTopRed(mesh, 5.0f);
 }
 
+// A triangle with per-vertex colours (COLOR_0) and a material with a base colour factor.
+std::string ColouredTriangleGltf() {
+  const std::vector<float> positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const std::vector<float> colours = {1, 0, 0, 0, 1, 0, 0, 0, 1};  // RGB
+  std::vector<unsigned char> buffer;
+  Append(&buffer, positions);
+  Append(&buffer, colours);
+  return R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+  "nodes": [{"mesh": 0}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "COLOR_0": 1}, "material": 0}]}],
+  "materials": [{"name": "tinted", "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 1]}}],
+  "buffers": [{"byteLength": 72, "uri": "data:application/octet-stream;base64,)" +
+         Base64(buffer) + R"("}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                  {"buffer": 0, "byteOffset": 36, "byteLength": 36}],
+  "accessors": [
+    {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+     "min": [0, 0, 0], "max": [1, 1, 0]},
+    {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3"}]
+})";
+}
+
+TEST_F(MeshIoTest, GltfVertexColoursAndBaseColour) {
+  const Mesh mesh = LoadMesh(Write("tri.gltf", ColouredTriangleGltf()));
+  ASSERT_EQ(mesh.num_triangles(), 1);
+  ASSERT_EQ(mesh.materials.size(), 1u);
+  EXPECT_TRUE(mesh.materials[0].diffuse_bgr.isApprox(Eigen::Vector3f(0.6f, 0.4f, 0.2f), 1e-5f))
+      << mesh.materials[0].diffuse_bgr.transpose();
+  ASSERT_EQ(mesh.colors_bgr.size(), 3u);
+  for (int v = 0; v < 3; ++v) {
+    const Eigen::Vector3f& p = mesh.vertices[v];
+    const Eigen::Vector3f expected = p.x() > 0.5f   ? Eigen::Vector3f(0, 1, 0)
+                                     : p.y() > 0.5f ? Eigen::Vector3f(1, 0, 0)
+                                                    : Eigen::Vector3f(0, 0, 1);
+    EXPECT_TRUE(mesh.colors_bgr[v].isApprox(expected, 1e-5f)) << mesh.colors_bgr[v].transpose();
+  }
+}
+
 // Loads `source` with assimp and writes it with assimp's exporter `format_id`.
 void AssimpConvert(const std::string& source, const std::string& format_id,
                    const std::string& target) {
@@ -547,6 +585,24 @@ TEST_F(MeshIoTest, ColladaAndGlbFromAssimpExporter) {
   ExpectSameAppearance(reference, LoadMesh(Path("quad.glb")), 1e-3f);
   AssimpConvert(obj, "gltf2", Path("quad2.gltf"));
   ExpectSameAppearance(reference, LoadMesh(Path("quad2.gltf")), 1e-3f);
+}
+
+TEST_F(MeshIoTest, ColladaKeepsFileAxesAndAppliesUnit) {
+  const std::string obj = Write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 2 0\nv 0 0 3\nf 1 2 3\nf 1 4 2\n");
+  AssimpConvert(obj, "collada", Path("t.dae"));
+  std::ifstream in(Path("t.dae"));
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{"Y_UP", "Z_UP"},
+                                 std::pair<std::string, std::string>{"meter=\"1\"", "meter=\"0.01\""}}) {
+    const size_t at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+  }
+  const Mesh mesh = LoadMesh(Write("z_up_cm.dae", text));
+  Eigen::Vector3f lo, hi;
+  mesh.BoundingBox(&lo, &hi);
+  EXPECT_TRUE(lo.isApprox(Eigen::Vector3f::Zero()) || lo.norm() < 1e-7f) << lo.transpose();
+  EXPECT_TRUE(hi.isApprox(Eigen::Vector3f(0.01f, 0.02f, 0.03f), 1e-5f)) << hi.transpose();
 }
 
 // ---------------------------------------------------------------------------------------
