@@ -134,6 +134,24 @@ void ExpectOutward(const Mesh& mesh) {
   }
 }
 
+// Textures are not mirrored seen from outside: on every triangle the uv frame (u right,
+// v up) has the same handedness as the surface seen from outside, i.e.
+// (dP/du x dP/dv) . n > 0 with n the triangle's outward (right-hand-rule) normal.
+void ExpectTexturesNotMirrored(const Mesh& mesh) {
+  for (int t = 0; t < mesh.num_triangles(); ++t) {
+    const Eigen::Vector3i& tri = mesh.triangles[t];
+    const Eigen::Vector3f e1 = mesh.vertices[tri[1]] - mesh.vertices[tri[0]];
+    const Eigen::Vector3f e2 = mesh.vertices[tri[2]] - mesh.vertices[tri[0]];
+    const Eigen::Vector2f d1 = mesh.uvs[tri[1]] - mesh.uvs[tri[0]];
+    const Eigen::Vector2f d2 = mesh.uvs[tri[2]] - mesh.uvs[tri[0]];
+    // [e1 e2] = [dP/du dP/dv] [d1 d2]; the sign of det[d1 d2] says whether the uv
+    // triangle is counter-clockwise like the 3-D one seen from outside.
+    const float uv_area = d1.x() * d2.y() - d1.y() * d2.x();
+    ASSERT_GT(e1.cross(e2).norm(), 0.0f);
+    EXPECT_GT(uv_area, 0.0f) << "triangle " << t << " maps its texture mirrored";
+  }
+}
+
 void ExpectThrowsMentioning(const std::function<void()>& f, const std::vector<std::string>& words) {
   try {
     f();
@@ -180,6 +198,7 @@ TEST(DevModels, CubesLoadInMetres) {
     }
     EXPECT_TRUE(cube.HasUvTexture());
     ExpectOutward(cube);
+    ExpectTexturesNotMirrored(cube);
     Eigen::Vector3f centre;
     float radius;
     cube.BoundingSphere(&centre, &radius);
@@ -213,6 +232,7 @@ TEST(DevModels, SphereAndBox) {
     EXPECT_EQ(box.materials.size(), 6u);
     EXPECT_TRUE(box.HasUvTexture());
     ExpectOutward(box);
+    ExpectTexturesNotMirrored(box);
   }
 }
 

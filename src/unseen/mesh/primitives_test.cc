@@ -28,6 +28,17 @@ void ExpectOutwardTriangles(const Mesh& mesh) {
   }
 }
 
+// Textures read correctly (not mirrored) seen from outside: each triangle's uv triangle is
+// counter-clockwise like the triangle itself seen from outside.
+void ExpectTexturesNotMirrored(const Mesh& mesh) {
+  for (int t = 0; t < mesh.num_triangles(); ++t) {
+    const Eigen::Vector3i& tri = mesh.triangles[t];
+    const Eigen::Vector2f d1 = mesh.uvs[tri[1]] - mesh.uvs[tri[0]];
+    const Eigen::Vector2f d2 = mesh.uvs[tri[2]] - mesh.uvs[tri[0]];
+    EXPECT_GT(d1.x() * d2.y() - d1.y() * d2.x(), 0.0f) << "triangle " << t;
+  }
+}
+
 // Texture variation: standard deviation of the grey texture's Sobel gradient magnitude.
 double MeanGradient(const cv::Mat& texture) {
   cv::Mat grey, gx, gy, mag;
@@ -51,6 +62,7 @@ TEST(LetteredCube, GeometryAndMaterials) {
   EXPECT_TRUE(lo.isApprox(Eigen::Vector3f::Constant(-0.048f)));
   EXPECT_TRUE(hi.isApprox(Eigen::Vector3f::Constant(0.048f)));
   ExpectOutwardTriangles(cube);
+  ExpectTexturesNotMirrored(cube);
   for (const Eigen::Vector2f& uv : cube.uvs) {
     EXPECT_TRUE((uv.array() >= 0.0f).all() && (uv.array() <= 1.0f).all());
   }
@@ -138,6 +150,7 @@ TEST(TexturedSphere, TriangleCountRadiusAndOrientation) {
   EXPECT_EQ(sphere.num_triangles(), 2 * rings * segments - 2 * segments);
   for (const Eigen::Vector3f& v : sphere.vertices) EXPECT_NEAR(v.norm(), 0.03f, 1e-6f);
   ExpectOutwardTriangles(sphere);
+  ExpectTexturesNotMirrored(sphere);
   for (size_t i = 0; i < sphere.normals.size(); ++i) {
     EXPECT_NEAR(sphere.normals[i].dot(sphere.vertices[i].normalized()), 1.0f, 1e-5f);
   }
@@ -201,6 +214,7 @@ TEST(TexturedBox, GeometryOrientationAndTextures) {
   EXPECT_TRUE(hi.isApprox(Eigen::Vector3f(0.08f, 0.05f, 0.03f)));
   EXPECT_TRUE(lo.isApprox(Eigen::Vector3f(-0.08f, -0.05f, -0.03f)));
   ExpectOutwardTriangles(box);
+  ExpectTexturesNotMirrored(box);
   ASSERT_EQ(box.materials.size(), 6u);
   // +x face spans y (0.10) by z (0.06): texture keeps that aspect ratio.
   EXPECT_EQ(box.materials[0].texture.cols, 256);
