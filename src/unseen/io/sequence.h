@@ -32,12 +32,30 @@ class Sequence {
   // Opens a sequence folder (with sequence.json) or a plain BOP scene folder. Validates
   // every JSON file up front (frame ids agree across cameras, cam_K present, rotations
   // orthonormal) and throws unseen::Error naming file, field and value otherwise.
+  //  * sequence.json: only "cameras" is required; fps defaults to 30, reference_camera to
+  //    the first camera; object.model is relative to the sequence folder. Unknown fields
+  //    (e.g. "frames", "notes") are ignored.
+  //  * A plain BOP scene is one camera named after its folder; models are looked for in
+  //    <scene>/models, <scene>/../models and <scene>/../../models (BOP dataset layout).
+  //  * Intrinsics must be the same in every frame of scene_camera.json (unseen assumes
+  //    fixed intrinsics); so must the extrinsics of a rig. A plain BOP scene whose camera
+  //    moves uses its camera frame as the world frame (with a warning).
+  //  * Frame ids come from scene_camera.json; every frame needs rgb/<id>.png|.jpg (and
+  //    depth/<id>.png when the camera has a depth folder). The image size is read from the
+  //    first image; ReadFrame checks every image against it.
+  //  * The object id is sequence.json's object.obj_id, else the first obj_id of the
+  //    ground truth.
   static Sequence Open(const std::string& path);
   // A video file or a folder of images (sorted by name) as a one-camera sequence without
   // ground truth. `camera` gives the intrinsics; its width/height may be 0 (taken from
   // the first frame) but must match the frames when given.
+  // Video frames are read sequentially: ReadFrame(i) right after ReadFrame(i - 1) is cheap,
+  // any other index seeks (CAP_PROP_POS_FRAMES). num_frames is the container's frame
+  // count, or found by reading through once when the container does not tell.
   static Sequence OpenVideo(const std::string& path, const PinholeCamera& camera,
                             double fps = 30.0);
+  // Image folders take .png/.jpg/.jpeg/.bmp/.tif/.tiff files sorted by file name.
+  // Both give one camera "cam0" whose frame is the world frame, and no ground truth.
   static Sequence OpenImageFolder(const std::string& path, const PinholeCamera& camera,
                                   double fps = 30.0);
 
@@ -46,7 +64,11 @@ class Sequence {
   ~Sequence();
 
   const std::string& path() const;
-  const Rig& rig() const;  // extrinsics of the first frame's scene_camera.json
+  // Extrinsics of the first frame's scene_camera.json. Images are undistorted at input
+  // (cv::remap with maps from cv::initUndistortRectifyMap, computed once per camera) to
+  // the *same* K, so the rig's intrinsics are the calibrated K without distortion
+  // coefficients; pixels that map outside the source image are black (depth 0).
+  const Rig& rig() const;
   int reference_camera() const;  // index into rig().cameras
   double fps() const;
   int num_frames() const;
@@ -55,8 +77,11 @@ class Sequence {
   // file when it is missing, unreadable or of the wrong size.
   Frame ReadFrame(int index) const;
   // Restricts the rig to the named cameras (in that order). Throws for an unknown name.
+  // The reference camera stays the same camera when selected, else becomes the first.
   void SelectCameras(const std::vector<std::string>& names);
 
+  // True when any selected camera has depth images; Frame::depths then has one entry per
+  // camera, empty for cameras without depth.
   bool has_depth() const;
   bool has_ground_truth() const;
   // world_from_obj at frame `index` from the reference camera's scene_gt.json (or the
@@ -65,11 +90,12 @@ class Sequence {
   // The same from camera `camera`'s own scene_gt.json (for checking rig consistency).
   std::optional<Rigid3d> GroundTruthFromCamera(int index, int camera) const;
 
-  int obj_id() const;
+  int obj_id() const;  // 0 when there is no object (videos, image folders)
   // Absolute path of the object model (sequence.json "object.model", else
   // models/obj_<id>.ply|obj|gltf|glb), or empty when there is none.
   std::string model_path() const;
-  // Loads the model in metres (BOP models are millimetres).
+  // Loads the model in metres (BOP models are millimetres). Throws unseen::Error when the
+  // sequence has no model or it cannot be read.
   Mesh LoadModel() const;
 
  private:
@@ -90,7 +116,13 @@ struct SequenceWriterOptions {
 };
 
 // Writes a DATASET.md sequence frame by frame; JSON files are written by Finish() (also
-// called by the destructor if not called explicitly).
+// called by the destructor if not called explicitly). Images are written as given (with
+// the rig's distortion coefficients, if any, as "dist"); depth in metres becomes 16-bit
+// PNG value round(depth_m * 1000 / depth_scale), with 0 for no measurement and for depths
+// beyond the 16-bit range (one warning). A camera given depth in some frames gets an
+// all-zero depth image in the others. Ground truth is written per camera as model->camera
+// in millimetres. Throws unseen::Error for a rig or frame that does not fit (image count,
+// size or type, invalid pose, frame id written twice).
 class SequenceWriter {
  public:
   SequenceWriter(const std::string& dir, const Rig& rig, const SequenceWriterOptions& options);
