@@ -8,6 +8,9 @@
 #include <vector>
 
 #include <Eigen/Geometry>
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
 
 #include "unseen/util/error.h"
 
@@ -24,7 +27,6 @@ constexpr int kSubpixelBits = 8;
 constexpr int64_t kSubpixel = 1 << kSubpixelBits;  // screen positions snap to 1/256 px
 constexpr double kGuardPx = 4096.0;  // triangles are clipped to the image grown by this
 constexpr int kMaxImageSide = 32768;  // keeps snapped coordinates in int32
-constexpr int kWideRowPx = 16;        // bounding boxes at least this wide skip to the span
 
 // A mesh vertex after projection (one per vertex, shared by its triangles).
 struct ProjectedVertex {
@@ -33,13 +35,14 @@ struct ProjectedVertex {
   int32_t ok;    // 1: z >= near and inside the guard band; 0: the triangle needs clipping
 };
 
-// A corner of a triangle handed to the scan converter: snapped position, 1/z, and the
-// barycentric coordinates (b1, b2) of the point in its mesh triangle (the corners of an
-// unclipped triangle are (0, 0), (1, 0), (0, 1)).
+// A corner of a triangle handed to the scan converter: snapped position, 1/z, and two
+// attributes interpolated perspective-correctly: either the barycentric coordinates
+// (b1, b2) of the point in its mesh triangle (the corners of an unclipped triangle are
+// (0, 0), (1, 0), (0, 1)) or its texture coordinates (u, v).
 struct RasterVertex {
   int64_t x, y;
   float inv_z;
-  float b1, b2;
+  float w1, w2;
 };
 
 // Where the scan converter writes; every pointer addresses image pixel (roi.x0, roi.y0).
@@ -49,7 +52,7 @@ struct RasterTarget {
   size_t z_stride = 0;     // floats per row
   int32_t* ids = nullptr;
   size_t id_stride = 0;
-  float* weights = nullptr;  // (b1/z, b2/z) per pixel
+  float* weights = nullptr;  // (w1/z, w2/z) per pixel
   size_t w_stride = 0;       // floats per row
 };
 
@@ -63,6 +66,67 @@ inline int64_t CeilDiv(int64_t a, int64_t b) { return -FloorDiv(-a, b); }
 // "left" edge) or, when horizontal, down (a "top" edge) owns the pixel centres on it.
 inline int64_t FillBias(int64_t a, int64_t b) { return (a > 0 || (a == 0 && b > 0)) ? 0 : -1; }
 
+// q = floor(a / b), r = a - q b in [0, b), for b > 0 and |a| < 2^53: a double division
+// guesses, one integer correction makes it exact.
+inline void FloorDivMod(int64_t a, int64_t b, int64_t* q, int64_t* r) {
+  int64_t qq = static_cast<int64_t>(std::floor(double(a) / double(b)));
+  int64_t rr = a - qq * b;
+  if (rr < 0) {
+    --qq;
+    rr += b;
+  } else if (rr >= b) {
+    ++qq;
+    rr -= b;
+  }
+  *q = qq;
+  *r = rr;
+}
+
+// One edge function walked row by row. Along a row E(k) = e + k * sx (k pixels from the
+// bounding box's left column); the pixels with E >= 0 are k >= -floor(e / sx) for sx > 0
+// and k <= floor(e / -sx) for sx < 0. floor(e / |sx|) is stepped exactly from row to row
+// (Bresenham-style, e += sy), so spans cost no division per row.
+class EdgeWalker {
+ public:
+  EdgeWalker(int64_t e, int64_t sx, int64_t sy) {
+    if (sx == 0) {
+      dir_ = 0;
+      q_ = e;
+      dq_ = sy;
+      return;
+    }
+    dir_ = sx > 0 ? 1 : -1;
+    s_ = sx > 0 ? sx : -sx;
+    FloorDivMod(e, s_, &q_, &r_);
+    FloorDivMod(sy, s_, &dq_, &dr_);
+  }
+  // Narrows [*lo, *hi]; false when no pixel of the row is inside.
+  bool Narrow(int64_t* lo, int64_t* hi) const {
+    if (dir_ > 0) {
+      *lo = std::max(*lo, -q_);
+    } else if (dir_ < 0) {
+      *hi = std::min(*hi, q_);
+    } else {
+      return q_ >= 0;
+    }
+    return true;
+  }
+  void NextRow() {
+    q_ += dq_;
+    if (dir_ != 0) {
+      r_ += dr_;
+      if (r_ >= s_) {
+        r_ -= s_;
+        ++q_;
+      }
+    }
+  }
+
+ private:
+  int dir_;
+  int64_t q_, r_ = 0, s_ = 1, dq_, dr_ = 0;
+};
+
 // Affine screen-space interpolation f(x, y) = f0 + gx (x - x_ref) + gy (y - y_ref) of
 // the corner values f0, f1, f2 (pixels).
 struct Plane {
@@ -72,7 +136,7 @@ struct Plane {
 // Scan-converts one triangle. `cull`: drop it when it faces away from the camera.
 // Front-facing triangles (counter-clockwise seen from outside) have negative signed area
 // in y-down pixel coordinates.
-template <bool kWeights, bool kIds>
+template <bool kAttributes, bool kIds>
 void RasterTriangle(RasterVertex v0, RasterVertex v1, RasterVertex v2, bool cull, int32_t id,
                     const RasterTarget& t) {
   int64_t area2 = (v1.x - v0.x) * (v2.y - v0.y) - (v2.x - v0.x) * (v1.y - v0.y);
@@ -96,11 +160,12 @@ void RasterTriangle(RasterVertex v0, RasterVertex v1, RasterVertex v2, bool cull
   const int64_t a1 = v2.y - v0.y, b1 = v0.x - v2.x;
   const int64_t a2 = v0.y - v1.y, b2 = v1.x - v0.x;
   const int64_t px = x_lo * kSubpixel, py = y_lo * kSubpixel;
-  int64_t e0_row = a0 * (px - v1.x) + b0 * (py - v1.y) + FillBias(a0, b0);
-  int64_t e1_row = a1 * (px - v2.x) + b1 * (py - v2.y) + FillBias(a1, b1);
-  int64_t e2_row = a2 * (px - v0.x) + b2 * (py - v0.y) + FillBias(a2, b2);
-  const int64_t sx0 = a0 * kSubpixel, sx1 = a1 * kSubpixel, sx2 = a2 * kSubpixel;
-  const int64_t sy0 = b0 * kSubpixel, sy1 = b1 * kSubpixel, sy2 = b2 * kSubpixel;
+  EdgeWalker edge0(a0 * (px - v1.x) + b0 * (py - v1.y) + FillBias(a0, b0), a0 * kSubpixel,
+                   b0 * kSubpixel);
+  EdgeWalker edge1(a1 * (px - v2.x) + b1 * (py - v2.y) + FillBias(a1, b1), a1 * kSubpixel,
+                   b1 * kSubpixel);
+  EdgeWalker edge2(a2 * (px - v0.x) + b2 * (py - v0.y) + FillBias(a2, b2), a2 * kSubpixel,
+                   b2 * kSubpixel);
 
   // Barycentric l_k = E_k / area2; dl_k/dx = a_k * 256 / area2 per pixel.
   const double s = static_cast<double>(kSubpixel) / static_cast<double>(area2);
@@ -113,52 +178,36 @@ void RasterTriangle(RasterVertex v0, RasterVertex v1, RasterVertex v2, bool cull
   const float y_ref = static_cast<float>(v0.y) / kSubpixel;
   const Plane pz = make_plane(v0.inv_z, v1.inv_z, v2.inv_z);
   Plane pw1{}, pw2{};
-  if constexpr (kWeights) {
-    // b_k / z is affine in screen space (perspective-correct interpolation).
-    pw1 = make_plane(double(v0.inv_z) * v0.b1, double(v1.inv_z) * v1.b1, double(v2.inv_z) * v2.b1);
-    pw2 = make_plane(double(v0.inv_z) * v0.b2, double(v1.inv_z) * v1.b2, double(v2.inv_z) * v2.b2);
+  if constexpr (kAttributes) {
+    // w / z is affine in screen space (perspective-correct interpolation).
+    pw1 = make_plane(double(v0.inv_z) * v0.w1, double(v1.inv_z) * v1.w1, double(v2.inv_z) * v2.w1);
+    pw2 = make_plane(double(v0.inv_z) * v0.w2, double(v1.inv_z) * v1.w2, double(v2.inv_z) * v2.w2);
   }
-  const bool wide = x_hi - x_lo >= kWideRowPx;
-
-  for (int y = y_lo; y <= y_hi; ++y, e0_row += sy0, e1_row += sy1, e2_row += sy2) {
-    int64_t e0 = e0_row, e1 = e1_row, e2 = e2_row;
-    int x = x_lo;
-    if (wide) {
-      // Skip to (one pixel before) the first centre inside every edge rising with x; the
-      // exact integer test below still decides each pixel.
-      int64_t skip = 0;
-      if (a0 > 0 && e0 < 0) skip = std::max(skip, int64_t(double(-e0) / double(sx0)) - 1);
-      if (a1 > 0 && e1 < 0) skip = std::max(skip, int64_t(double(-e1) / double(sx1)) - 1);
-      if (a2 > 0 && e2 < 0) skip = std::max(skip, int64_t(double(-e2) / double(sx2)) - 1);
-      if (skip > x_hi - x) continue;
-      x += static_cast<int>(skip);
-      e0 += skip * sx0;
-      e1 += skip * sx1;
-      e2 += skip * sx2;
+  for (int y = y_lo; y <= y_hi; ++y, edge0.NextRow(), edge1.NextRow(), edge2.NextRow()) {
+    // The span [x_lo + lo, x_lo + hi] of centres inside all three edges, exactly.
+    int64_t lo = 0, hi = x_hi - x_lo;
+    if (!edge0.Narrow(&lo, &hi) || !edge1.Narrow(&lo, &hi) || !edge2.Narrow(&lo, &hi) ||
+        lo > hi) {
+      continue;
     }
+    const int x_begin = x_lo + static_cast<int>(lo), x_end = x_lo + static_cast<int>(hi);
     const float dy = static_cast<float>(y) - y_ref;
     const float z_row = pz.f0 + pz.gy * dy;
     float w1_row = 0.0f, w2_row = 0.0f;
-    if constexpr (kWeights) {
+    if constexpr (kAttributes) {
       w1_row = pw1.f0 + pw1.gy * dy;
       w2_row = pw2.f0 + pw2.gy * dy;
     }
     float* z_ptr = t.inv_z + (y - t.roi.y0) * t.z_stride - t.roi.x0;
     int32_t* id_ptr = kIds ? t.ids + (y - t.roi.y0) * t.id_stride - t.roi.x0 : nullptr;
-    float* w_ptr = kWeights ? t.weights + (y - t.roi.y0) * t.w_stride - 2 * t.roi.x0 : nullptr;
-    bool entered = false;
-    for (; x <= x_hi; ++x, e0 += sx0, e1 += sx1, e2 += sx2) {
-      if ((e0 | e1 | e2) < 0) {
-        if (entered) break;  // convex: the span has ended
-        continue;
-      }
-      entered = true;
-      const float dx = static_cast<float>(x) - x_ref;
+    float* w_ptr = kAttributes ? t.weights + (y - t.roi.y0) * t.w_stride - 2 * t.roi.x0 : nullptr;
+    float dx = static_cast<float>(x_begin) - x_ref;  // exact, and so are its increments
+    for (int x = x_begin; x <= x_end; ++x, dx += 1.0f) {
       const float inv_z = z_row + pz.gx * dx;
       if (inv_z > z_ptr[x]) {
         z_ptr[x] = inv_z;
         if constexpr (kIds) id_ptr[x] = id;
-        if constexpr (kWeights) {
+        if constexpr (kAttributes) {
           w_ptr[2 * x] = w1_row + pw1.gx * dx;
           w_ptr[2 * x + 1] = w2_row + pw2.gx * dx;
         }
@@ -202,8 +251,10 @@ struct ClipContext {
 
 // The slow path for a triangle with a corner behind the near plane or far outside the
 // image: clip it in the camera frame, then scan-convert the fan of the polygon.
-template <bool kWeights, bool kIds>
+// `attributes`: the values at the triangle's corners.
+template <bool kAttributes, bool kIds>
 void RasterClipped(const Mesh& mesh, const Eigen::Vector3i& tri, int32_t id, bool cull,
+                   const Eigen::Vector2f attributes[3],
                    const std::vector<ProjectedVertex>& projected, const ClipContext& c,
                    const RasterTarget& target) {
   ClipVertex a[16], b[16];
@@ -224,29 +275,35 @@ void RasterClipped(const Mesh& mesh, const Eigen::Vector3i& tri, int32_t id, boo
     std::swap(in, out);
   }
   RasterVertex r[16];
+  const Eigen::Vector2f d1 = attributes[1] - attributes[0], d2 = attributes[2] - attributes[0];
   for (int k = 0; k < n; ++k) {
     const ClipVertex& v = in[k];
+    const Eigen::Vector2f w = attributes[0] + float(v.b1) * d1 + float(v.b2) * d2;
     if (v.vertex >= 0 && projected[v.vertex].ok) {
       // Same snapped position as in the fast path, so shared edges stay watertight.
       const ProjectedVertex& q = projected[v.vertex];
-      r[k] = {q.x, q.y, q.inv_z, float(v.b1), float(v.b2)};
+      r[k] = {q.x, q.y, q.inv_z, w.x(), w.y()};
       continue;
     }
     const double inv_z = 1.0 / v.p.z();
-    const double u = std::clamp(c.fx * v.p.x() * inv_z + c.cx, c.lo_x, c.hi_x);
-    const double w = std::clamp(c.fy * v.p.y() * inv_z + c.cy, c.lo_y, c.hi_y);
-    r[k] = {std::llround(u * kSubpixel), std::llround(w * kSubpixel), float(inv_z), float(v.b1),
-            float(v.b2)};
+    const double px = std::clamp(c.fx * v.p.x() * inv_z + c.cx, c.lo_x, c.hi_x);
+    const double py = std::clamp(c.fy * v.p.y() * inv_z + c.cy, c.lo_y, c.hi_y);
+    r[k] = {std::llround(px * kSubpixel), std::llround(py * kSubpixel), float(inv_z), w.x(),
+            w.y()};
   }
   // The polygon keeps the triangle's orientation; culling was decided above.
   for (int k = 1; k + 1 < n; ++k) {
-    RasterTriangle<kWeights, kIds>(r[0], r[k], r[k + 1], false, id, target);
+    RasterTriangle<kAttributes, kIds>(r[0], r[k], r[k + 1], false, id, target);
   }
 }
 
-template <bool kWeights, bool kIds>
-void RasterMesh(const Mesh& mesh, const std::vector<ProjectedVertex>& projected, bool cull,
-                const ClipContext& clip, const RasterTarget& target) {
+// Scan-converts every triangle. The interpolated attributes are the texture coordinates
+// `uvs` (per vertex) or, when null, the barycentric coordinates in the mesh triangle.
+template <bool kAttributes, bool kIds>
+void RasterMesh(const Mesh& mesh, const Eigen::Vector2f* uvs,
+                const std::vector<ProjectedVertex>& projected, bool cull, const ClipContext& clip,
+                const RasterTarget& target) {
+  const Eigen::Vector2f corners[3] = {{0.0f, 0.0f}, {1.0f, 0.0f}, {0.0f, 1.0f}};
   const uint32_t nv = static_cast<uint32_t>(mesh.vertices.size());
   const int nt = mesh.num_triangles();
   for (int t = 0; t < nt; ++t) {
@@ -259,12 +316,19 @@ void RasterMesh(const Mesh& mesh, const std::vector<ProjectedVertex>& projected,
     const ProjectedVertex& p0 = projected[tri[0]];
     const ProjectedVertex& p1 = projected[tri[1]];
     const ProjectedVertex& p2 = projected[tri[2]];
+    Eigen::Vector2f w[3] = {corners[0], corners[1], corners[2]};
+    if (kAttributes && uvs != nullptr) {
+      w[0] = uvs[tri[0]];
+      w[1] = uvs[tri[1]];
+      w[2] = uvs[tri[2]];
+    }
     if (p0.ok & p1.ok & p2.ok) {
-      RasterTriangle<kWeights, kIds>({p0.x, p0.y, p0.inv_z, 0.0f, 0.0f},
-                                     {p1.x, p1.y, p1.inv_z, 1.0f, 0.0f},
-                                     {p2.x, p2.y, p2.inv_z, 0.0f, 1.0f}, cull, t, target);
+      RasterTriangle<kAttributes, kIds>({p0.x, p0.y, p0.inv_z, w[0].x(), w[0].y()},
+                                        {p1.x, p1.y, p1.inv_z, w[1].x(), w[1].y()},
+                                        {p2.x, p2.y, p2.inv_z, w[2].x(), w[2].y()}, cull, t,
+                                        target);
     } else {
-      RasterClipped<kWeights, kIds>(mesh, tri, t, cull, projected, clip, target);
+      RasterClipped<kAttributes, kIds>(mesh, tri, t, cull, w, projected, clip, target);
     }
   }
 }
@@ -315,38 +379,55 @@ struct TextureView {
   }
 };
 
-inline Eigen::Vector3f Lerp4(const float* p00, const float* p01, const float* p10,
-                             const float* p11, float ax, float ay) {
-  Eigen::Vector3f c;
-  for (int k = 0; k < 3; ++k) {
-    const float top = p00[k] + ax * (p01[k] - p00[k]);
-    const float bottom = p10[k] + ax * (p11[k] - p10[k]);
-    c[k] = top + ay * (bottom - top);
+inline void Lerp4(const float* p00, const float* p01, const float* p10, const float* p11,
+                  float ax, float ay, float* __restrict out, bool may_read_one_more) {
+#if defined(__SSE2__)
+  if (may_read_one_more) {  // four-float loads read one float past the texel
+    const __m128 a = _mm_loadu_ps(p00), b = _mm_loadu_ps(p01);
+    const __m128 c = _mm_loadu_ps(p10), d = _mm_loadu_ps(p11);
+    const __m128 vax = _mm_set1_ps(ax);
+    const __m128 top = _mm_add_ps(a, _mm_mul_ps(vax, _mm_sub_ps(b, a)));
+    const __m128 bottom = _mm_add_ps(c, _mm_mul_ps(vax, _mm_sub_ps(d, c)));
+    const __m128 r = _mm_add_ps(top, _mm_mul_ps(_mm_set1_ps(ay), _mm_sub_ps(bottom, top)));
+    _mm_storel_pi(reinterpret_cast<__m64*>(out), r);
+    _mm_store_ss(out + 2, _mm_movehl_ps(r, r));
+    return;
   }
-  return c;
+#endif
+  const float t0 = p00[0] + ax * (p01[0] - p00[0]), b0 = p10[0] + ax * (p11[0] - p10[0]);
+  const float t1 = p00[1] + ax * (p01[1] - p00[1]), b1 = p10[1] + ax * (p11[1] - p10[1]);
+  const float t2 = p00[2] + ax * (p01[2] - p00[2]), b2 = p10[2] + ax * (p11[2] - p10[2]);
+  out[0] = t0 + ay * (b0 - t0);
+  out[1] = t1 + ay * (b1 - t1);
+  out[2] = t2 + ay * (b2 - t2);
+}
+
+// Index of texel column x wrapped into [0, n).
+inline int Wrap(int x, int n) {
+  if (static_cast<unsigned>(x) < static_cast<unsigned>(n)) return x;
+  x %= n;
+  return x < 0 ? x + n : x;
 }
 
 // Bilinear sample at OBJ texture coordinates (v up), repeating.
-inline Eigen::Vector3f SampleWrap(const TextureView& t, float u, float v) {
-  u -= std::floor(u);
-  v -= std::floor(v);
-  if (!(u >= 0.0f && u < 1.0f)) u = 0.0f;  // NaN uv
-  if (!(v >= 0.0f && v < 1.0f)) v = 0.0f;
-  const float fx = u * t.width - 0.5f, fy = (1.0f - v) * t.height - 0.5f;
+inline void SampleWrap(const TextureView& t, float u, float v, float* __restrict bgr) {
+  float fx = u * t.width - 0.5f, fy = (1.0f - v) * t.height - 0.5f;
+  if (!(std::abs(fx) < 1e8f)) fx = 0.0f;  // NaN or absurd uv
+  if (!(std::abs(fy) < 1e8f)) fy = 0.0f;
   const float flx = std::floor(fx), fly = std::floor(fy);
-  int x0 = static_cast<int>(flx), y0 = static_cast<int>(fly);  // in [-1, size - 1]
-  int x1 = x0 + 1, y1 = y0 + 1;
-  if (x0 < 0) x0 = t.width - 1;
-  if (x1 >= t.width) x1 = 0;
-  if (y0 < 0) y0 = t.height - 1;
-  if (y1 >= t.height) y1 = 0;
+  const int x0 = Wrap(static_cast<int>(flx), t.width);
+  const int y0 = Wrap(static_cast<int>(fly), t.height);
+  const int x1 = x0 + 1 == t.width ? 0 : x0 + 1;
+  const int y1 = y0 + 1 == t.height ? 0 : y0 + 1;
   const float* r0 = t.data + y0 * t.step;
   const float* r1 = t.data + y1 * t.step;
-  return Lerp4(r0 + 3 * x0, r0 + 3 * x1, r1 + 3 * x0, r1 + 3 * x1, fx - flx, fy - fly);
+  // Every row but the last has at least one more float after each texel.
+  const bool safe = y0 + 1 < t.height && y1 + 1 < t.height;
+  Lerp4(r0 + 3 * x0, r0 + 3 * x1, r1 + 3 * x0, r1 + 3 * x1, fx - flx, fy - fly, bgr, safe);
 }
 
 // Bilinear sample at a pixel position (pixel-centre convention), clamped to the image.
-inline Eigen::Vector3f SampleClamp(const TextureView& t, float x, float y) {
+inline void SampleClamp(const TextureView& t, float x, float y, float* __restrict bgr) {
   x = std::clamp(x, 0.0f, static_cast<float>(t.width - 1));
   y = std::clamp(y, 0.0f, static_cast<float>(t.height - 1));
   const int x0 = std::min(static_cast<int>(x), t.width - 1);
@@ -354,7 +435,8 @@ inline Eigen::Vector3f SampleClamp(const TextureView& t, float x, float y) {
   const int x1 = std::min(x0 + 1, t.width - 1), y1 = std::min(y0 + 1, t.height - 1);
   const float* r0 = t.data + y0 * t.step;
   const float* r1 = t.data + y1 * t.step;
-  return Lerp4(r0 + 3 * x0, r0 + 3 * x1, r1 + 3 * x0, r1 + 3 * x1, x - x0, y - y0);
+  const bool safe = y1 + 1 < t.height;
+  Lerp4(r0 + 3 * x0, r0 + 3 * x1, r1 + 3 * x0, r1 + 3 * x1, x - x0, y - y0, bgr, safe);
 }
 
 struct ProjectorView {
@@ -365,7 +447,8 @@ struct ProjectorView {
   TextureView image;
 };
 
-// Colour of the surface point with barycentric coordinates (b1, b2) in triangle `tri`.
+// Colour and normal of surface points given by their barycentric coordinates (b1, b2) in
+// a mesh triangle. Per-triangle data is prepared once per run of pixels of a triangle.
 class Shader {
  public:
   explicit Shader(const Mesh& mesh) : mesh_(mesh) {
@@ -386,48 +469,81 @@ class Shader {
     }
   }
 
-  Eigen::Vector3f Color(int tri, float b1, float b2) const {
-    const Eigen::Vector3i& t = mesh_.triangles[tri];
-    if (!projectors_.empty()) {
-      Eigen::Vector3f c;
-      if (ProjectiveColor(t, b1, b2, &c)) return c;
+  const TextureView* textures() const { return textures_.data(); }
+
+  // Writes the BGR colour of the point (b1, b2) of triangle `tri` to `bgr`.
+  void Color(int tri, float b1, float b2, float* bgr) {
+    if (tri != color_tri_) PrepareColor(tri);
+    if (kind_ == Kind::kProjective && ProjectiveColor(b1, b2, bgr)) return;
+    if (fallback_kind_ == Kind::kTexture) {
+      SampleWrap(*texture_, uv0_.x() + b1 * duv1_.x() + b2 * duv2_.x(),
+                 uv0_.y() + b1 * duv1_.y() + b2 * duv2_.y(), bgr);
+      return;
     }
-    const int m = mesh_.triangle_materials.empty() ? (mesh_.materials.empty() ? -1 : 0)
-                                                   : mesh_.triangle_materials[tri];
-    if (m >= 0 && textures_[m].data != nullptr && !mesh_.uvs.empty()) {
-      const Eigen::Vector2f& u0 = mesh_.uvs[t[0]];
-      const Eigen::Vector2f uv = u0 + b1 * (mesh_.uvs[t[1]] - u0) + b2 * (mesh_.uvs[t[2]] - u0);
-      return SampleWrap(textures_[m], uv.x(), uv.y());
-    }
-    if (!mesh_.colors_bgr.empty()) {
-      const Eigen::Vector3f& c0 = mesh_.colors_bgr[t[0]];
-      return c0 + b1 * (mesh_.colors_bgr[t[1]] - c0) + b2 * (mesh_.colors_bgr[t[2]] - c0);
-    }
-    if (m >= 0) return mesh_.materials[m].diffuse_bgr;
-    return Eigen::Vector3f::Ones();
+    for (int k = 0; k < 3; ++k) bgr[k] = c0_[k] + b1 * dc1_[k] + b2 * dc2_[k];
   }
 
   // Unit normal in the object frame.
-  Eigen::Vector3f Normal(int tri, float b1, float b2) const {
-    const Eigen::Vector3i& t = mesh_.triangles[tri];
-    Eigen::Vector3f n;
-    if (!mesh_.normals.empty()) {
-      const Eigen::Vector3f& n0 = mesh_.normals[t[0]];
-      n = n0 + b1 * (mesh_.normals[t[1]] - n0) + b2 * (mesh_.normals[t[2]] - n0);
-    } else {
-      const Eigen::Vector3f& v0 = mesh_.vertices[t[0]];
-      n = (mesh_.vertices[t[1]] - v0).cross(mesh_.vertices[t[2]] - v0);
+  Eigen::Vector3f Normal(int tri, float b1, float b2) {
+    if (tri != normal_tri_) {
+      normal_tri_ = tri;
+      const Eigen::Vector3i& t = mesh_.triangles[tri];
+      if (!mesh_.normals.empty()) {
+        n0_ = mesh_.normals[t[0]];
+        dn1_ = mesh_.normals[t[1]] - n0_;
+        dn2_ = mesh_.normals[t[2]] - n0_;
+      } else {
+        const Eigen::Vector3f& v0 = mesh_.vertices[t[0]];
+        n0_ = (mesh_.vertices[t[1]] - v0).cross(mesh_.vertices[t[2]] - v0);
+        dn1_.setZero();
+        dn2_.setZero();
+      }
     }
+    const Eigen::Vector3f n = n0_ + b1 * dn1_ + b2 * dn2_;
     const float len = n.norm();
     return len > 0.0f ? Eigen::Vector3f(n / len) : Eigen::Vector3f::Zero();
   }
 
  private:
-  bool ProjectiveColor(const Eigen::Vector3i& t, float b1, float b2, Eigen::Vector3f* c) const {
-    const Eigen::Vector3f& v0 = mesh_.vertices[t[0]];
-    const Eigen::Vector3f e1 = mesh_.vertices[t[1]] - v0, e2 = mesh_.vertices[t[2]] - v0;
-    const Eigen::Vector3f p = v0 + b1 * e1 + b2 * e2;
-    const Eigen::Vector3f n = e1.cross(e2);
+  enum class Kind { kTexture, kProjective, kVertexColor, kConstant };
+
+  void PrepareColor(int tri) {
+    color_tri_ = tri;
+    const Eigen::Vector3i& t = mesh_.triangles[tri];
+    const int m = mesh_.triangle_materials.empty() ? (mesh_.materials.empty() ? -1 : 0)
+                                                   : mesh_.triangle_materials[tri];
+    // The colour without projectors: texture, vertex colours, diffuse, white.
+    if (m >= 0 && textures_[m].data != nullptr && !mesh_.uvs.empty()) {
+      kind_ = Kind::kTexture;
+      texture_ = &textures_[m];
+      uv0_ = mesh_.uvs[t[0]];
+      duv1_ = mesh_.uvs[t[1]] - uv0_;
+      duv2_ = mesh_.uvs[t[2]] - uv0_;
+    } else if (!mesh_.colors_bgr.empty()) {
+      kind_ = Kind::kVertexColor;
+      c0_ = mesh_.colors_bgr[t[0]];
+      dc1_ = mesh_.colors_bgr[t[1]] - c0_;
+      dc2_ = mesh_.colors_bgr[t[2]] - c0_;
+    } else {
+      kind_ = Kind::kConstant;
+      c0_ = m >= 0 ? mesh_.materials[m].diffuse_bgr : Eigen::Vector3f::Ones();
+      dc1_.setZero();
+      dc2_.setZero();
+    }
+    if (!projectors_.empty()) {
+      fallback_kind_ = kind_;
+      kind_ = Kind::kProjective;
+      p0_ = mesh_.vertices[t[0]];
+      dp1_ = mesh_.vertices[t[1]] - p0_;
+      dp2_ = mesh_.vertices[t[2]] - p0_;
+      face_normal_ = dp1_.cross(dp2_);
+    } else {
+      fallback_kind_ = kind_;
+    }
+  }
+
+  bool ProjectiveColor(float b1, float b2, float* bgr) const {
+    const Eigen::Vector3f p = p0_ + b1 * dp1_ + b2 * dp2_;
     int best = -1;
     float best_score = 0.0f, best_x = 0.0f, best_y = 0.0f;
     for (size_t k = 0; k < projectors_.size(); ++k) {
@@ -437,7 +553,7 @@ class Shader {
       const float x = v.fx * q.x() / q.z() + v.cx, y = v.fy * q.y() / q.z() + v.cy;
       if (!(x >= -0.5f && y >= -0.5f && x < v.max_x && y < v.max_y)) continue;
       // Cosine (times |n|) between the normal and the direction to the projector.
-      const float score = -(v.rotation * n).dot(q) / q.norm();
+      const float score = -(v.rotation * face_normal_).dot(q) / q.norm();
       if (score > best_score) {
         best = static_cast<int>(k);
         best_score = score;
@@ -446,13 +562,23 @@ class Shader {
       }
     }
     if (best < 0) return false;
-    *c = SampleClamp(projectors_[best].image, best_x, best_y);
+    SampleClamp(projectors_[best].image, best_x, best_y, bgr);
     return true;
   }
 
   const Mesh& mesh_;
   std::vector<TextureView> textures_;
   std::vector<ProjectorView> projectors_;
+  // The triangle prepared for Color().
+  int color_tri_ = -1;
+  Kind kind_ = Kind::kConstant, fallback_kind_ = Kind::kConstant;
+  const TextureView* texture_ = nullptr;
+  Eigen::Vector2f uv0_, duv1_, duv2_;
+  Eigen::Vector3f c0_, dc1_, dc2_;
+  Eigen::Vector3f p0_, dp1_, dp2_, face_normal_;
+  // The triangle prepared for Normal().
+  int normal_tri_ = -1;
+  Eigen::Vector3f n0_, dn1_, dn2_;
 };
 
 void ReleaseOutputs(RenderBuffers* out) {
@@ -476,7 +602,6 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
   UNSEEN_CHECK(cam_from_obj.IsValid(), "Render: cam_from_obj is not a valid pose ({})",
                cam_from_obj.ToString());
   CheckMeshForRender(mesh);
-  const bool need_weights = options.write_color || options.write_normals;
   if (options.write_color) {
     const int nm = static_cast<int>(mesh.materials.size());
     for (size_t t = 0; t < mesh.triangle_materials.size(); ++t) {
@@ -538,7 +663,17 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
   out->depth.create(size, CV_32FC1);
   out->depth.setTo(0.0f);
   out->mask.create(size, CV_8UC1);
-  const bool need_ids = need_weights || options.write_triangle_ids;
+  // Colour mode: texture coordinates interpolated directly when every material is
+  // textured (one texture lookup per pixel, no per-triangle work), else barycentric
+  // coordinates resolved per triangle.
+  const bool uv_mode = options.write_color && !options.write_normals && mesh.projectors.empty() &&
+                       !mesh.uvs.empty() && !mesh.materials.empty() &&
+                       std::all_of(mesh.materials.begin(), mesh.materials.end(),
+                                   [](const Material& m) { return !m.texture.empty(); });
+  const bool single_material = mesh.triangle_materials.empty() || mesh.materials.size() == 1;
+  const bool need_weights = options.write_color || options.write_normals;
+  const bool need_ids = (need_weights && !(uv_mode && single_material)) ||
+                        options.write_triangle_ids;
   cv::Mat& ids = options.write_triangle_ids ? out->triangle_id : out->scratch_ids;
   if (need_ids) ids.create(size, CV_32SC1);
   if (!options.write_triangle_ids) out->triangle_id.release();
@@ -577,12 +712,15 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
 
   // 3. Scan conversion.
   const bool cull = options.cull_back_faces;
-  if (need_weights) {
-    RasterMesh<true, true>(mesh, projected, cull, clip, target);
+  const Eigen::Vector2f* uvs = uv_mode ? mesh.uvs.data() : nullptr;
+  if (need_weights && need_ids) {
+    RasterMesh<true, true>(mesh, uvs, projected, cull, clip, target);
+  } else if (need_weights) {
+    RasterMesh<true, false>(mesh, uvs, projected, cull, clip, target);
   } else if (need_ids) {
-    RasterMesh<false, true>(mesh, projected, cull, clip, target);
+    RasterMesh<false, true>(mesh, uvs, projected, cull, clip, target);
   } else {
-    RasterMesh<false, false>(mesh, projected, cull, clip, target);
+    RasterMesh<false, false>(mesh, uvs, projected, cull, clip, target);
   }
 
   // 4. Resolve: metric depth, mask, ids, and colour/normals of the visible surface.
@@ -596,49 +734,51 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
   } else {
     out->normal.release();
   }
-  if (!need_ids) {
-    for (int y = 0; y < size.height; ++y) {
-      float* z = out->depth.ptr<float>(y);
-      uint8_t* m = out->mask.ptr<uint8_t>(y);
-      for (int x = 0; x < size.width; ++x) {
-        const bool covered = z[x] > 0.0f;
-        m[x] = covered ? 255 : 0;
-        z[x] = covered ? 1.0f / z[x] : 0.0f;
-      }
-    }
-    return;
-  }
-  const Shader shader(mesh);
+  Shader shader(mesh);
   const Eigen::Matrix3f rotation = cam_from_obj.RotationMatrix().cast<float>();
+  const int width = size.width;
   for (int y = 0; y < size.height; ++y) {
     float* z = out->depth.ptr<float>(y);
     uint8_t* m = out->mask.ptr<uint8_t>(y);
-    int32_t* id = ids.ptr<int32_t>(y);
-    const float* w = need_weights ? out->scratch_weights.ptr<float>(y) : nullptr;
-    float* color = options.write_color ? out->color.ptr<float>(y) : nullptr;
-    float* normal = options.write_normals ? out->normal.ptr<float>(y) : nullptr;
-    for (int x = 0; x < size.width; ++x) {
-      if (!(z[x] > 0.0f)) {
-        z[x] = 0.0f;
-        m[x] = 0;
-        id[x] = -1;
-        if (color) color[3 * x] = color[3 * x + 1] = color[3 * x + 2] = 0.0f;
-        if (normal) normal[3 * x] = normal[3 * x + 1] = normal[3 * x + 2] = 0.0f;
-        continue;
+    for (int x = 0; x < width; ++x) m[x] = z[x] > 0.0f ? 255 : 0;
+    for (int x = 0; x < width; ++x) z[x] = z[x] > 0.0f ? 1.0f / z[x] : 0.0f;
+    if (options.write_triangle_ids) {
+      int32_t* id = ids.ptr<int32_t>(y);
+      for (int x = 0; x < width; ++x) id[x] = m[x] ? id[x] : -1;
+    }
+    if (options.write_color) {
+      float* color = out->color.ptr<float>(y);
+      const float* w = out->scratch_weights.ptr<float>(y);
+      const int32_t* id = need_ids ? ids.ptr<int32_t>(y) : nullptr;
+      if (uv_mode) {
+        const TextureView* textures = shader.textures();
+        const std::vector<int>& materials = mesh.triangle_materials;
+        for (int x = 0; x < width; ++x) {
+          if (!m[x]) {
+            color[3 * x] = color[3 * x + 1] = color[3 * x + 2] = 0.0f;
+            continue;
+          }
+          const TextureView& texture = single_material ? textures[0] : textures[materials[id[x]]];
+          SampleWrap(texture, w[2 * x] * z[x], w[2 * x + 1] * z[x], color + 3 * x);
+        }
+      } else {
+        for (int x = 0; x < width; ++x) {
+          if (!m[x]) {
+            color[3 * x] = color[3 * x + 1] = color[3 * x + 2] = 0.0f;
+            continue;
+          }
+          shader.Color(id[x], w[2 * x] * z[x], w[2 * x + 1] * z[x], color + 3 * x);
+        }
       }
-      const float depth = 1.0f / z[x];
-      z[x] = depth;
-      m[x] = 255;
-      if (!need_weights) continue;
-      const float b1 = w[2 * x] * depth, b2 = w[2 * x + 1] * depth;
-      if (color) {
-        const Eigen::Vector3f c = shader.Color(id[x], b1, b2);
-        color[3 * x] = c[0];
-        color[3 * x + 1] = c[1];
-        color[3 * x + 2] = c[2];
-      }
-      if (normal) {
-        const Eigen::Vector3f n = rotation * shader.Normal(id[x], b1, b2);
+    }
+    if (options.write_normals) {
+      float* normal = out->normal.ptr<float>(y);
+      const float* w = out->scratch_weights.ptr<float>(y);
+      const int32_t* id = ids.ptr<int32_t>(y);
+      std::memset(normal, 0, sizeof(float) * 3 * width);
+      for (int x = 0; x < width; ++x) {
+        if (!m[x]) continue;
+        const Eigen::Vector3f n = rotation * shader.Normal(id[x], w[2 * x] * z[x], w[2 * x + 1] * z[x]);
         normal[3 * x] = n[0];
         normal[3 * x + 1] = n[1];
         normal[3 * x + 2] = n[2];
