@@ -242,6 +242,57 @@ TEST(Rasterizer, TextureWrapsAndMaterialColourAppliesWithoutTexture) {
   EXPECT_EQ(out.color.at<cv::Vec3f>(15, 15), cv::Vec3f(0.1f, 0.2f, 0.3f));
 }
 
+TEST(Rasterizer, SeveralTexturedMaterialsEachReproduceTheirTexture) {
+  const PinholeCamera cam = TestCamera();
+  Mesh quads = MakeScreenQuad(cam, 9.5, 9.5, 29.5, 29.5, 1.0);
+  const Mesh second = MakeScreenQuad(cam, 49.5, 19.5, 79.5, 39.5, 1.2);
+  quads.vertices.insert(quads.vertices.end(), second.vertices.begin(), second.vertices.end());
+  quads.triangles.push_back({4, 5, 6});
+  quads.triangles.push_back({4, 6, 7});
+  quads.uvs = {{0, 1}, {0, 0}, {1, 0}, {1, 1}, {0, 1}, {0, 0}, {1, 0}, {1, 1}};
+  Material a, b;
+  a.texture = RandomTexture(20, 20, 5);
+  b.texture = RandomTexture(30, 20, 6);
+  quads.materials = {a, b};
+  quads.triangle_materials = {0, 0, 1, 1};
+  RenderBuffers out;
+  Render(quads, cam, Rigid3d(), cam.ImageRect(), RenderOptions(), &out);
+  EXPECT_LT(cv::norm(out.color(cv::Rect(10, 10, 20, 20)), a.texture, cv::NORM_INF), 1e-4);
+  EXPECT_LT(cv::norm(out.color(cv::Rect(50, 20, 30, 20)), b.texture, cv::NORM_INF), 1e-4);
+}
+
+// Texture coordinates are interpolated directly when every material is textured and
+// through barycentric coordinates otherwise (e.g. with normals); both must agree, also
+// for triangles cut by the near plane.
+TEST(Rasterizer, TextureCoordinatesAgreeBetweenInterpolationPaths) {
+  const PinholeCamera cam = TestCamera(200, 160);
+  Mesh sphere = MakeSphere(0.3f, 12, 24);
+  Material material;
+  material.texture = RandomTexture(64, 32, 9);
+  cv::GaussianBlur(material.texture, material.texture, cv::Size(5, 5), 1.5);  // smooth
+  sphere.materials = {material};
+  sphere.colors_bgr.clear();
+  RenderOptions uv_path, barycentric_path;
+  barycentric_path.write_normals = true;
+  // Far: no clipping; near: the sphere's front reaches z = 0.02 < near_m, so the near
+  // plane cuts triangles.
+  for (const Rigid3d& pose :
+       {Pose(Eigen::Vector3d(0.4, 0.1, 0.2), Eigen::Vector3d(0, 0, 1.0)),
+        Pose(Eigen::Vector3d(0.4, 0.1, 0.2), Eigen::Vector3d(0.03, 0.02, 0.32))}) {
+    for (bool cull : {true, false}) {
+      uv_path.cull_back_faces = barycentric_path.cull_back_faces = cull;
+      uv_path.near_m = barycentric_path.near_m = 0.05;
+      RenderBuffers a, b;
+      Render(sphere, cam, pose, cam.ImageRect(), uv_path, &a);
+      Render(sphere, cam, pose, cam.ImageRect(), barycentric_path, &b);
+      EXPECT_EQ(cv::norm(a.mask, b.mask, cv::NORM_INF), 0.0);
+      // (Near and culled: the whole visible front is nearer than near_m.)
+      if (!cull || pose.translation().z() > 0.5) EXPECT_GT(cv::countNonZero(a.mask), 1000);
+      EXPECT_LT(cv::norm(a.color, b.color, cv::NORM_INF), 1e-3);
+    }
+  }
+}
+
 // Fan and jittered grid covering [x0, x1] x [y0, y1]: every pixel centre strictly inside
 // must be covered by exactly one triangle.
 TEST(Rasterizer, SharedEdgesAreCoveredExactlyOnce) {
