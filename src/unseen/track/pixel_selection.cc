@@ -1,0 +1,250 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/track/pixel_selection.h"
+
+#include <cmath>
+
+#include "unseen/track/flow_jacobian.h"
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+// Luminance weights in BGR order (ITU-R BT.601).
+constexpr float kGreyWeights[3] = {0.114f, 0.587f, 0.299f};
+
+}  // namespace
+
+const char* ToString(ColorMode mode) {
+  switch (mode) {
+    case ColorMode::kColorGradientRedundancy: return "redundancy";
+    case ColorMode::kRawColor: return "raw";
+    case ColorMode::kGrey: return "grey";
+  }
+  return "?";
+}
+
+ColorMode ParseColorMode(const std::string& text, const std::string& what) {
+  if (text == "redundancy") return ColorMode::kColorGradientRedundancy;
+  if (text == "raw") return ColorMode::kRawColor;
+  if (text == "grey" || text == "gray") return ColorMode::kGrey;
+  ThrowError("{}: unknown colour mode '{}' (redundancy, raw, grey)", what, text);
+}
+
+void PixelSelectionOptions::Check() const {
+  UNSEEN_CHECK(min_gradient_sq >= 0.0 && std::isfinite(min_gradient_sq),
+               "selection.min_gradient_sq {} must be >= 0", min_gradient_sq);
+  UNSEEN_CHECK(max_normal_flow_px > 0.0 && std::isfinite(max_normal_flow_px),
+               "selection.max_normal_flow_px {} must be > 0", max_normal_flow_px);
+  UNSEEN_CHECK(occlusion_min_gradient_sq >= 0.0 && std::isfinite(occlusion_min_gradient_sq),
+               "selection.occlusion_min_gradient_sq {} must be >= 0", occlusion_min_gradient_sq);
+  UNSEEN_CHECK(occlusion_max_angle_rad > 0.0 && occlusion_max_angle_rad <= M_PI,
+               "selection.occlusion_max_angle_rad {} must be in (0, pi]", occlusion_max_angle_rad);
+  UNSEEN_CHECK(occlusion_max_magnitude_diff > 0.0 && std::isfinite(occlusion_max_magnitude_diff),
+               "selection.occlusion_max_magnitude_diff {} must be > 0",
+               occlusion_max_magnitude_diff);
+  UNSEEN_CHECK(min_eigen_ratio >= 1.0 && std::isfinite(min_eigen_ratio),
+               "selection.min_eigen_ratio {} must be >= 1", min_eigen_ratio);
+}
+
+SelectionCounts& SelectionCounts::operator+=(const SelectionCounts& o) {
+  candidates += o.candidates;
+  rejected_gradient += o.rejected_gradient;
+  rejected_input_gradient += o.rejected_input_gradient;
+  rejected_direction += o.rejected_direction;
+  rejected_magnitude += o.rejected_magnitude;
+  rejected_undirected += o.rejected_undirected;
+  rejected_normal_flow += o.rejected_normal_flow;
+  used += o.used;
+  equations += o.equations;
+  return *this;
+}
+
+void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options,
+                  FlowEquations* out, SelectionCounts* counts) {
+  const PreprocessedImage& v = *in.virtual_image;
+  const PreprocessedImage& im = *in.input_image;
+  const int w = in.roi.width(), h = in.roi.height();
+  UNSEEN_CHECK(v.blurred.cols == w && v.blurred.rows == h && v.gx.size() == v.blurred.size() &&
+                   im.blurred.size() == v.blurred.size() && in.region->size() == v.blurred.size() &&
+                   in.depth->size() == v.blurred.size(),
+               "SelectPixels: buffers do not match the region {}x{}", w, h);
+  const bool occlusion = options.use_occlusion_rejection;
+  UNSEEN_CHECK(!occlusion || im.gx.size() == v.blurred.size(),
+               "SelectPixels: occlusion rejection needs the input image's gradients");
+
+  const float tau = options.use_gradient_threshold ? float(options.min_gradient_sq) : 0.0f;
+  const float tvmax_sq = float(options.max_normal_flow_px * options.max_normal_flow_px);
+  const float tgm = float(options.occlusion_min_gradient_sq);
+  const float cos_theta = float(std::cos(options.occlusion_max_angle_rad));
+  const float tmd = float(options.occlusion_max_magnitude_diff);
+  const float ratio = float(options.min_eigen_ratio);
+  const float fx = float(in.camera.fx), fy = float(in.camera.fy);
+  const float cx = float(in.camera.cx), cy = float(in.camera.cy);
+  const float origin[3] = {float(in.origin_in_cam.x()), float(in.origin_in_cam.y()),
+                           float(in.origin_in_cam.z())};
+  SelectionCounts c;
+  float row[6];
+
+  for (int y = 0; y < h; ++y) {
+    const uint8_t* reg = in.region->ptr<uint8_t>(y);
+    const float* dep = in.depth->ptr<float>(y);
+    const float* vb = v.blurred.ptr<float>(y);
+    const float* vgx = v.gx.ptr<float>(y);
+    const float* vgy = v.gy.ptr<float>(y);
+    const float* ib = im.blurred.ptr<float>(y);
+    const float* igx = occlusion ? im.gx.ptr<float>(y) : nullptr;
+    const float* igy = occlusion ? im.gy.ptr<float>(y) : nullptr;
+    const float py = float(in.roi.y0 + y);
+    for (int x = 0; x < w; ++x) {
+      if (!reg[x]) continue;
+      const float z = dep[x];
+      if (!(z > 0.0f)) continue;
+      ++c.candidates;
+      const int k = 3 * x;
+      const float gx[3] = {vgx[k], vgx[k + 1], vgx[k + 2]};
+      const float gy[3] = {vgy[k], vgy[k + 1], vgy[k + 2]};
+      const float it[3] = {ib[k] - vb[k], ib[k + 1] - vb[k + 1], ib[k + 2] - vb[k + 2]};
+      float sq[3];
+      for (int j = 0; j < 3; ++j) sq[j] = gx[j] * gx[j] + gy[j] * gy[j];
+
+      // (4.8) gradient threshold.
+      float a = 0, d = 0, cc = 0;  // C = A^T A (3.6)
+      bool gradient_ok;
+      switch (options.color_mode) {
+        case ColorMode::kColorGradientRedundancy: {
+          for (int j = 0; j < 3; ++j) {
+            a += gx[j] * gx[j];
+            d += gy[j] * gy[j];
+            cc += gx[j] * gy[j];
+          }
+          const float l1 = 0.5f * (a + d) + std::sqrt(0.25f * (a - d) * (a - d) + cc * cc);
+          gradient_ok = l1 > tau && l1 > 0.0f;
+          break;
+        }
+        case ColorMode::kGrey: {
+          float ggx = 0, ggy = 0;
+          for (int j = 0; j < 3; ++j) {
+            ggx += kGreyWeights[j] * gx[j];
+            ggy += kGreyWeights[j] * gy[j];
+          }
+          const float s = ggx * ggx + ggy * ggy;
+          gradient_ok = s > tau && s > 0.0f;
+          break;
+        }
+        case ColorMode::kRawColor:
+        default:
+          gradient_ok = (sq[0] > tau && sq[0] > 0) || (sq[1] > tau && sq[1] > 0) ||
+                        (sq[2] > tau && sq[2] > 0);
+          break;
+      }
+      if (!gradient_ok) {
+        ++c.rejected_gradient;
+        continue;
+      }
+
+      // (4.13)-(4.15) occlusion rejection, per channel.
+      if (occlusion) {
+        const float hx[3] = {igx[k], igx[k + 1], igx[k + 2]};
+        const float hy[3] = {igy[k], igy[k + 1], igy[k + 2]};
+        bool input_ok = true, direction_ok = true;
+        float mag_v = 0, mag_i = 0;
+        for (int j = 0; j < 3; ++j) {
+          const float si = hx[j] * hx[j] + hy[j] * hy[j];
+          mag_v += sq[j];
+          mag_i += si;
+          if (sq[j] > tgm) {
+            if (si <= tgm) {
+              input_ok = false;
+            } else if (gx[j] * hx[j] + gy[j] * hy[j] < cos_theta * std::sqrt(sq[j] * si)) {
+              direction_ok = false;
+            }
+          }
+        }
+        if (!input_ok) {
+          ++c.rejected_input_gradient;
+          continue;
+        }
+        if (!direction_ok) {
+          ++c.rejected_direction;
+          continue;
+        }
+        if (std::abs(std::sqrt(mag_v) - std::sqrt(mag_i)) >= tmd) {
+          ++c.rejected_magnitude;
+          continue;
+        }
+      }
+
+      const float px = float(in.roi.x0 + x);
+      switch (options.color_mode) {
+        case ColorMode::kColorGradientRedundancy: {
+          const float l1 = 0.5f * (a + d) + std::sqrt(0.25f * (a - d) * (a - d) + cc * cc);
+          const float l2 = std::max(a + d - l1, 0.0f);
+          if (l1 < ratio * l2) {
+            ++c.rejected_undirected;
+            continue;
+          }
+          const bool by_y = d > a;
+          float sgx = 0, sgy = 0, sit = 0;
+          for (int j = 0; j < 3; ++j) {
+            const float s = (by_y ? gy[j] : gx[j]) < 0.0f ? -1.0f : 1.0f;
+            sgx += s * gx[j];
+            sgy += s * gy[j];
+            sit += s * it[j];
+          }
+          const float g2 = sgx * sgx + sgy * sgy;
+          if (!(g2 > 0.0f) || (options.use_normal_flow_bound && sit * sit >= tvmax_sq * g2)) {
+            ++c.rejected_normal_flow;
+            continue;
+          }
+          FlowRowInCamera(fx, fy, cx, cy, origin, px, py, z, sgx, sgy, row);
+          out->Add(row, -sit, 1.0f / std::sqrt(g2));
+          ++c.used;
+          ++c.equations;
+          break;
+        }
+        case ColorMode::kGrey: {
+          float ggx = 0, ggy = 0, git = 0;
+          for (int j = 0; j < 3; ++j) {
+            ggx += kGreyWeights[j] * gx[j];
+            ggy += kGreyWeights[j] * gy[j];
+            git += kGreyWeights[j] * it[j];
+          }
+          const float g2 = ggx * ggx + ggy * ggy;
+          if (options.use_normal_flow_bound && git * git >= tvmax_sq * g2) {
+            ++c.rejected_normal_flow;
+            continue;
+          }
+          FlowRowInCamera(fx, fy, cx, cy, origin, px, py, z, ggx, ggy, row);
+          out->Add(row, -git, 1.0f / std::sqrt(g2));
+          ++c.used;
+          ++c.equations;
+          break;
+        }
+        case ColorMode::kRawColor: {
+          int added = 0;
+          bool flow_rejected = false;
+          for (int j = 0; j < 3; ++j) {
+            if (!(sq[j] > tau && sq[j] > 0.0f)) continue;
+            if (options.use_normal_flow_bound && it[j] * it[j] >= tvmax_sq * sq[j]) {
+              flow_rejected = true;
+              continue;
+            }
+            FlowRowInCamera(fx, fy, cx, cy, origin, px, py, z, gx[j], gy[j], row);
+            out->Add(row, -it[j], 1.0f / std::sqrt(sq[j]));
+            ++added;
+          }
+          if (added == 0) {
+            if (flow_rejected) ++c.rejected_normal_flow;
+            continue;
+          }
+          ++c.used;
+          c.equations += added;
+          break;
+        }
+      }
+    }
+  }
+  *counts += c;
+}
+
+}  // namespace unseen

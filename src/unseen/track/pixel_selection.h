@@ -1,0 +1,79 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// Pixel selection and equation assembly (SPEC 3.1 step 4, 3.4, 3.6): from the
+// pre-processed virtual image Iv and input image Ii of one camera, keep the pixels of the
+// rendered object (mask and its blurred rim) that carry usable gradient and pass the
+// consistency tests, and turn each into a row of the 6-DoF optical-flow equation (3.1.1).
+#pragma once
+
+#include <string>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "unseen/camera/camera.h"
+#include "unseen/track/flow_solver.h"
+#include "unseen/track/preprocess.h"
+
+namespace unseen {
+
+// How colour enters the equations.
+enum class ColorMode {
+  kColorGradientRedundancy,  // 3.6: sign-aligned sum of the channels, one equation a pixel
+  kRawColor,                 // one equation per channel (3 per pixel)
+  kGrey,                     // luminance only (loses iso-luminant colour edges)
+};
+const char* ToString(ColorMode mode);  // "redundancy", "raw", "grey"
+// Throws unseen::Error naming `what` for an unknown name.
+ColorMode ParseColorMode(const std::string& text, const std::string& what = "color_mode");
+
+struct PixelSelectionOptions {
+  ColorMode color_mode = ColorMode::kColorGradientRedundancy;
+  bool use_gradient_threshold = true;
+  // tau of (4.8) on the squared gradient magnitude (lambda1 of 3.6 in the redundancy mode,
+  // |grad|^2 of the channel or of the luminance otherwise); intensities in [0, 1], per px^2.
+  double min_gradient_sq = 984e-6;
+  bool use_normal_flow_bound = true;
+  double max_normal_flow_px = 1.22;  // tau_vmax of (4.9), for blur sigma = 1.8 px
+  bool use_occlusion_rejection = true;
+  double occlusion_min_gradient_sq = 98.4e-6;  // tau_gm of (4.13), squared, per channel
+  double occlusion_max_angle_rad = 0.90;       // tau_theta of (4.14), per channel
+  double occlusion_max_magnitude_diff = 39.2e-3;  // tau_md of (4.15), |grad| over channels
+  double min_eigen_ratio = 10.0;  // lambda1 / lambda2 for a "directed" pixel (3.6)
+  void Check() const;
+};
+
+// How many pixels each test saw and rejected (summed over cameras/levels as needed).
+struct SelectionCounts {
+  long candidates = 0;               // mask + rim pixels with a depth
+  long rejected_gradient = 0;        // (4.8)
+  long rejected_input_gradient = 0;  // (4.13)
+  long rejected_direction = 0;       // (4.14)
+  long rejected_magnitude = 0;       // (4.15)
+  long rejected_undirected = 0;      // 3.6, lambda1 / lambda2 below the ratio
+  long rejected_normal_flow = 0;     // (4.9)
+  long used = 0;                     // pixels that gave at least one equation
+  long equations = 0;
+  // Pixels with rendered gradient, the denominator of the survival share (3.9).
+  long gradient_pixels() const { return candidates - rejected_gradient; }
+  SelectionCounts& operator+=(const SelectionCounts& o);
+};
+
+// One camera at one pyramid level, all buffers of the size of `roi`.
+struct SelectionInput {
+  const PreprocessedImage* virtual_image = nullptr;  // with gradients
+  const PreprocessedImage* input_image = nullptr;    // gradients needed for occlusion tests
+  const cv::Mat* region = nullptr;  // CV_8UC1, non-zero where pixels may be used
+  const cv::Mat* depth = nullptr;   // CV_32FC1, metres, camera-frame z (> 0 where usable)
+  PixelRect roi;                    // level pixels: buffer (0, 0) is pixel (roi.x0, roi.y0)
+  PinholeCamera camera;             // the level's camera
+  Eigen::Vector3d origin_in_cam = Eigen::Vector3d::Zero();  // object origin, camera frame
+};
+
+// Appends the equations of the selected pixels to `out` (rows in the camera frame, see
+// FlowRowInCamera) and adds to `counts`. Tests are applied in the order gradient (4.8),
+// occlusion (4.13)-(4.15), directedness (3.6, redundancy mode), normal flow (4.9).
+void SelectPixels(const SelectionInput& input, const PixelSelectionOptions& options,
+                  FlowEquations* out, SelectionCounts* counts);
+
+}  // namespace unseen

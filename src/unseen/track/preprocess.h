@@ -1,0 +1,36 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// Pre-processing of the virtual and the input image of one camera inside the region of
+// interest, identically for both (SPEC 3.1 step 3): LINF (3.2, (4.11)), Gaussian blur
+// (sigma = 1.8 px in the thesis), spatial gradients.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+namespace unseen {
+
+struct PreprocessOptions {
+  bool use_linf = true;          // LINF (4.11) before blurring
+  // Standard deviation of LINF's wide Gaussian at pyramid level 0, pixels; divided by 2^level
+  // at coarser levels (never below min_linf_sigma_px) so it covers the same part of the scene.
+  double linf_sigma_px = 16.0;
+  double min_linf_sigma_px = 4.0;
+  double linf_epsilon = 0.05;    // eps_n of (4.11), intensity in [0, 1]
+  double blur_sigma_px = 1.8;    // Gaussian blur, pixels of the level being processed [4.1.3]
+  void Check() const;
+  // LINF sigma at pyramid `level`, pixels of that level.
+  double LinfSigmaAtLevel(int level) const;
+};
+
+// One pre-processed image: blurred (after LINF) CV_32FC3 and, when asked, its gradients.
+struct PreprocessedImage {
+  cv::Mat blurred;
+  cv::Mat gx, gy;  // CV_32FC3, intensity per pixel (central differences)
+};
+
+// LINF (when enabled) + blur + (optionally) gradients of `image` (CV_32FC3 in [0, 1], a
+// region of the level-`level` image). Outputs are reallocated only when their size changes.
+void Preprocess(const cv::Mat& image, const PreprocessOptions& options, int level,
+                bool with_gradients, PreprocessedImage* out);
+
+}  // namespace unseen

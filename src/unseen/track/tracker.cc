@@ -1,0 +1,464 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/track/tracker.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
+
+#include "unseen/image/filters.h"
+#include "unseen/image/image_io.h"
+#include "unseen/track/flow_jacobian.h"
+#include "unseen/util/error.h"
+#include "unseen/util/logging.h"
+#include "unseen/util/timer.h"
+
+namespace unseen {
+namespace {
+
+double Ramp(double value, double zero_at, double one_at) {
+  const double t = (value - zero_at) / (one_at - zero_at);
+  return std::clamp(t, 0.0, 1.0);
+}
+
+// The twist taking pose `a` to pose `b` under (4.7).
+Vector6d TwistBetween(const Rigid3d& a, const Rigid3d& b) {
+  Vector6d twist;
+  twist.head<3>() = b.translation() - a.translation();
+  twist.tail<3>() = LogSO3(b.rotation() * a.rotation().inverse());
+  return twist;
+}
+
+}  // namespace
+
+StageTimes& StageTimes::operator+=(const StageTimes& o) {
+  predict_ms += o.predict_ms;
+  render_ms += o.render_ms;
+  preprocess_ms += o.preprocess_ms;
+  select_ms += o.select_ms;
+  solve_ms += o.solve_ms;
+  total_ms += o.total_ms;
+  return *this;
+}
+
+std::string SolveSummary::BriefReport() const {
+  std::string iters;
+  for (int l = num_levels - 1; l >= 0; --l) {
+    iters += fmt::format("{}{}", iters.empty() ? "" : "/", iterations_per_level[l]);
+  }
+  return fmt::format(
+      "levels {} iters {} | px cand {} grad- {} occ- {}/{}/{} undir- {} flow- {} used {} "
+      "(share {:.2f}) | res {:.3f}->{:.3f} px, last upd {:.3f} px, corr {:.1f} px{} | ms "
+      "pred {:.3f} rend {:.3f} pre {:.3f} sel {:.3f} solve {:.3f} total {:.3f}",
+      num_levels, iters, counts.candidates, counts.rejected_gradient,
+      counts.rejected_input_gradient, counts.rejected_direction, counts.rejected_magnitude,
+      counts.rejected_undirected, counts.rejected_normal_flow, counts.used, share,
+      initial_residual_px, final_residual_px, last_update_px, correction_px,
+      search_candidates ? fmt::format(", searched {}", search_candidates) : std::string(),
+      times.predict_ms, times.render_ms, times.preprocess_ms, times.select_ms, times.solve_ms,
+      times.total_ms);
+}
+
+std::string TrackResult::BriefReport() const {
+  return fmt::format("{} conf {:.2f} {} | {}", ToString(status), confidence,
+                     world_from_obj.ToString(), summary.BriefReport());
+}
+
+// Buffers of one camera, reused from frame to frame.
+struct Tracker::CameraWork {
+  bool active = false;
+  PinholeCamera camera;  // level camera
+  PixelRect roi;         // level pixels
+  cv::Mat input_roi, composite, region, depth_used;
+  cv::Mat mask, depth, coverage;  // virtual image's mask (any coverage), depth, 2x2 count
+  PreprocessedImage input_pre, virtual_pre;
+  RenderBuffers render;
+};
+
+Tracker::Tracker(const Rig& rig, Mesh model, const TrackerOptions& options)
+    : rig_(rig), options_(options) {
+  rig_.Check();
+  options_.Check();
+  for (const RigCamera& c : rig_.cameras) {
+    cam_from_world_.push_back(c.cam_from_world());
+    work_.push_back(std::make_unique<CameraWork>());
+  }
+  predictor_ = MakeMotionPredictor(options_.predictor);
+  SetModel(std::move(model));
+}
+
+Tracker::~Tracker() = default;
+
+void Tracker::SetModel(Mesh model) {
+  model.Check("tracker model");
+  Eigen::Vector3f centre;
+  float radius = 0.0f;
+  model.BoundingSphere(&centre, &radius);
+  UNSEEN_CHECK(radius > 0.0f && std::isfinite(radius),
+               "tracker model: bounding-sphere radius {} m must be positive", radius);
+  sphere_centre_ = centre.cast<double>();
+  sphere_radius_ = radius;
+  model_ = std::make_shared<const Mesh>(std::move(model));
+}
+
+void Tracker::Initialize(const Rigid3d& world_from_obj) {
+  UNSEEN_CHECK(world_from_obj.IsValid(), "Tracker: initial pose {} is not a valid finite pose",
+               world_from_obj.ToString());
+  predictor_->Reset(world_from_obj);
+  last_good_ = world_from_obj;
+  status_ = TrackStatus::kTracking;
+  bad_frames_ = 0;
+  initialized_ = true;
+}
+
+int Tracker::NumLevelsFor(const Rigid3d& world_from_obj) const {
+  double diameter_px = 0.0;
+  const Eigen::Vector3d centre_world = world_from_obj * sphere_centre_;
+  for (int c = 0; c < rig_.size(); ++c) {
+    const Eigen::Vector3d p = cam_from_world_[c] * centre_world;
+    if (p.z() <= sphere_radius_) continue;
+    const PinholeCamera& cam = rig_.cameras[c].intrinsics;
+    diameter_px = std::max(diameter_px, 2.0 * sphere_radius_ * std::max(cam.fx, cam.fy) / p.z());
+  }
+  if (diameter_px <= options_.pyramid.min_object_px) return 1;
+  const int levels = 1 + static_cast<int>(std::floor(std::log2(diameter_px /
+                                                               options_.pyramid.min_object_px)));
+  return std::clamp(levels, 1, options_.pyramid.max_levels);
+}
+
+double Tracker::UpdatePixels(const Rigid3d& world_from_obj, const Vector6d& twist,
+                             int level) const {
+  // Bound on the image motion of the bounding sphere: lateral translation moves it by
+  // f v / z, translation along the optical axis by about f r v / z^2, rotation by f r w / z.
+  const Eigen::Vector3d centre_world = world_from_obj * sphere_centre_;
+  const double rotation = twist.tail<3>().norm() * sphere_radius_;
+  double px = 0.0;
+  for (int c = 0; c < rig_.size(); ++c) {
+    const Eigen::Vector3d p = cam_from_world_[c] * centre_world;
+    const double z = p.z();
+    if (z <= 0.5 * sphere_radius_) continue;
+    const Eigen::Vector3d v = cam_from_world_[c].rotation() * twist.head<3>();
+    const double motion = std::hypot(v.x(), v.y()) + std::abs(v.z()) * sphere_radius_ / z + rotation;
+    const PinholeCamera& cam = rig_.cameras[c].intrinsics;
+    px = std::max(px, std::max(cam.fx, cam.fy) / double(1 << level) * motion / z);
+  }
+  return px;
+}
+
+std::vector<cv::Mat> Tracker::CheckImages(const std::vector<cv::Mat>& images) const {
+  UNSEEN_CHECK(static_cast<int>(images.size()) == rig_.size(),
+               "Tracker::Track: got {} images for a rig of {} cameras", images.size(), rig_.size());
+  std::vector<cv::Mat> out(images.size());
+  for (size_t c = 0; c < images.size(); ++c) {
+    const cv::Mat& im = images[c];
+    const PinholeCamera& cam = rig_.cameras[c].intrinsics;
+    const std::string& name = rig_.cameras[c].name;
+    UNSEEN_CHECK(!im.empty(), "Tracker::Track: image of camera '{}' is empty", name);
+    UNSEEN_CHECK(im.cols == cam.width && im.rows == cam.height,
+                 "Tracker::Track: image of camera '{}' is {}x{}, the camera is {}x{}", name, im.cols,
+                 im.rows, cam.width, cam.height);
+    if (im.type() == CV_32FC3) {
+      out[c] = im;
+    } else {
+      UNSEEN_CHECK(im.type() == CV_8UC3,
+                   "Tracker::Track: image of camera '{}' has type {}; expected CV_32FC3 or CV_8UC3",
+                   name, im.type());
+      out[c] = ToFloatBgr(im, "camera '" + name + "' image");
+    }
+  }
+  return out;
+}
+
+double Tracker::Confidence(const SolveSummary& s) const {
+  const FailureOptions& f = options_.failure;
+  if (s.equations < f.min_pixels || s.counts.gradient_pixels() <= 0) return 0.0;
+  const double share_term = Ramp(s.share, f.min_share, f.good_share);
+  const double residual_term = Ramp(s.initial_residual_px, f.bad_residual_px, f.good_residual_px);
+  const double update_term = Ramp(s.last_update_px, f.bad_update_px, f.good_update_px);
+  return share_term * residual_term * update_term;
+}
+
+TrackResult Tracker::Align(const std::vector<cv::Mat>& images, const Rigid3d& world_from_obj,
+                           int num_levels) {
+  UNSEEN_CHECK(world_from_obj.IsValid(), "Tracker::Align: start pose {} is not valid",
+               world_from_obj.ToString());
+  UNSEEN_CHECK(num_levels >= 0 && num_levels <= 8, "Tracker::Align: num_levels {} not in [0, 8]",
+               num_levels);
+  Timer total;
+  TrackResult r = AlignChecked(CheckImages(images), world_from_obj, num_levels);
+  r.summary.times.total_ms = total.ElapsedMilliseconds();
+  return r;
+}
+
+bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, CameraWork* work,
+                            StageTimes* times) {
+  CameraWork& w = *work;
+  const RenderOptions render_options;
+  Timer timer;
+  const int width = w.roi.width(), height = w.roi.height();
+  if (!supersample) {
+    Render(*model_, w.camera, cam_from_obj, w.roi, render_options, &w.render);
+    times->render_ms += timer.ElapsedMilliseconds();
+    if (w.render.mask.rows != height || w.render.mask.cols != width) return false;
+    // Virtual image = input with the render pasted over it (3.1 step 2).
+    timer.Restart();
+    w.input_roi.copyTo(w.composite);
+    w.render.color.copyTo(w.composite, w.render.mask);
+    w.mask = w.render.mask;
+    w.depth = w.render.depth;
+    times->preprocess_ms += timer.ElapsedMilliseconds();
+    return true;
+  }
+  const PinholeCamera fine = w.camera.Scaled(0.5);
+  const PixelRect fine_roi{2 * w.roi.x0, 2 * w.roi.y0, 2 * w.roi.x1, 2 * w.roi.y1};
+  Render(*model_, fine, cam_from_obj, fine_roi, render_options, &w.render);
+  times->render_ms += timer.ElapsedMilliseconds();
+  if (w.render.mask.rows != 2 * height || w.render.mask.cols != 2 * width) return false;
+
+  // Area-average the 2x2 samples: premultiplied colour, coverage, mean depth of the
+  // covered samples. Where coverage is partial, the part not covered shows the background
+  // estimated from the neighbouring uncovered pixels of the input (at the true pose the
+  // input's own pixel there already mixes in the object, which would bias the silhouette).
+  timer.Restart();
+  w.composite.create(height, width, CV_32FC3);
+  w.mask.create(height, width, CV_8UC1);
+  w.depth.create(height, width, CV_32FC1);
+  w.coverage.create(height, width, CV_8UC1);
+  for (int y = 0; y < height; ++y) {
+    const uint8_t* m0 = w.render.mask.ptr<uint8_t>(2 * y);
+    const uint8_t* m1 = w.render.mask.ptr<uint8_t>(2 * y + 1);
+    const float* d0 = w.render.depth.ptr<float>(2 * y);
+    const float* d1 = w.render.depth.ptr<float>(2 * y + 1);
+    const float* c0 = w.render.color.ptr<float>(2 * y);
+    const float* c1 = w.render.color.ptr<float>(2 * y + 1);
+    const float* in = w.input_roi.ptr<float>(y);
+    float* out = w.composite.ptr<float>(y);
+    uint8_t* mask = w.mask.ptr<uint8_t>(y);
+    uint8_t* cov = w.coverage.ptr<uint8_t>(y);
+    float* depth = w.depth.ptr<float>(y);
+    for (int x = 0; x < width; ++x) {
+      const int a = 2 * x, b = 2 * x + 1;
+      const int n = (m0[a] != 0) + (m0[b] != 0) + (m1[a] != 0) + (m1[b] != 0);
+      cov[x] = static_cast<uint8_t>(n);
+      mask[x] = n ? 255 : 0;
+      if (n == 0) {
+        depth[x] = 0.0f;
+        for (int k = 0; k < 3; ++k) out[3 * x + k] = in[3 * x + k];
+        continue;
+      }
+      depth[x] = (d0[a] + d0[b] + d1[a] + d1[b]) / float(n);
+      for (int k = 0; k < 3; ++k) {
+        out[3 * x + k] = 0.25f * (c0[3 * a + k] + c0[3 * b + k] + c1[3 * a + k] + c1[3 * b + k]);
+      }
+    }
+  }
+  for (int y = 0; y < height; ++y) {
+    const uint8_t* cov = w.coverage.ptr<uint8_t>(y);
+    float* out = w.composite.ptr<float>(y);
+    for (int x = 0; x < width; ++x) {
+      const int n = cov[x];
+      if (n == 0 || n == 4) continue;
+      float bg[3] = {0, 0, 0};
+      int count = 0;
+      for (int dy = -1; dy <= 1; ++dy) {
+        const int yy = y + dy;
+        if (yy < 0 || yy >= height) continue;
+        const uint8_t* cr = w.coverage.ptr<uint8_t>(yy);
+        const float* ir = w.input_roi.ptr<float>(yy);
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int xx = x + dx;
+          if (xx < 0 || xx >= width || cr[xx] != 0) continue;
+          for (int k = 0; k < 3; ++k) bg[k] += ir[3 * xx + k];
+          ++count;
+        }
+      }
+      const float* in = w.input_roi.ptr<float>(y);
+      const float rest = 1.0f - 0.25f * n;
+      for (int k = 0; k < 3; ++k) {
+        out[3 * x + k] += rest * (count ? bg[k] / float(count) : in[3 * x + k]);
+      }
+    }
+  }
+  times->preprocess_ms += timer.ElapsedMilliseconds();
+  return true;
+}
+
+TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigid3d& start,
+                                  int num_levels) {
+  const PyramidOptions& po = options_.pyramid;
+  const int ncam = rig_.size();
+  TrackResult result;
+  SolveSummary& s = result.summary;
+  s.num_levels = num_levels > 0 ? num_levels : NumLevelsFor(start);
+  s.iterations_per_level.assign(s.num_levels, 0);
+  const int margin =
+      static_cast<int>(std::ceil(3.0 * options_.preprocess.blur_sigma_px)) + po.rim_px + 2;
+  const cv::Mat rim_kernel =
+      cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * po.rim_px + 1, 2 * po.rim_px + 1));
+  const bool input_gradients = options_.selection.use_occlusion_rejection;
+  std::vector<FlowEquations> equations(ncam);
+  Rigid3d pose = start;
+
+  for (int level = s.num_levels - 1; level >= 0; --level) {
+    // Region of interest and input pre-processing, once per level (3.5).
+    Timer timer;
+    for (int c = 0; c < ncam; ++c) {
+      CameraWork& w = *work_[c];
+      w.active = false;
+      w.camera = rig_.cameras[c].intrinsics.PyramidLevel(level);
+      const Eigen::Vector3d centre = cam_from_world_[c] * (pose * sphere_centre_);
+      const std::optional<PixelRect> rect = w.camera.SphereRect(centre, sphere_radius_);
+      if (!rect) continue;
+      const PinholeCamera& cam0 = rig_.cameras[c].intrinsics;
+      w.roi = rect->Grow(margin).Intersect(LevelRect(cam0.width, cam0.height, level));
+      if (w.roi.width() < 8 || w.roi.height() < 8) continue;
+      w.input_roi = DownsampledRegion(images[c], level, w.roi);
+      Preprocess(w.input_roi, options_.preprocess, level, input_gradients, &w.input_pre);
+      w.active = true;
+    }
+    s.times.preprocess_ms += timer.ElapsedMilliseconds();
+
+    for (int iteration = 0; iteration < po.max_iterations_per_level; ++iteration) {
+      SelectionCounts counts;
+      for (int c = 0; c < ncam; ++c) {
+        CameraWork& w = *work_[c];
+        equations[c].Clear();
+        if (!w.active) continue;
+        const Rigid3d cam_from_obj = cam_from_world_[c] * pose;
+        if (!RenderVirtual(cam_from_obj, level < po.supersampled_levels, &w, &s.times)) continue;
+        timer.Restart();
+        Preprocess(w.composite, options_.preprocess, level, true, &w.virtual_pre);
+        s.times.preprocess_ms += timer.ElapsedMilliseconds();
+
+        // Mask and its blurred rim; depth of the rim from the nearest surface.
+        timer.Restart();
+        if (po.rim_px > 0) {
+          cv::dilate(w.mask, w.region, rim_kernel);
+          cv::dilate(w.depth, w.depth_used, rim_kernel);
+          w.depth.copyTo(w.depth_used, w.mask);
+        } else {
+          w.mask.copyTo(w.region);
+          w.depth.copyTo(w.depth_used);
+        }
+        w.region.row(0).setTo(0);
+        w.region.row(w.region.rows - 1).setTo(0);
+        w.region.col(0).setTo(0);
+        w.region.col(w.region.cols - 1).setTo(0);
+        SelectionInput in;
+        in.virtual_image = &w.virtual_pre;
+        in.input_image = &w.input_pre;
+        in.region = &w.region;
+        in.depth = &w.depth_used;
+        in.roi = w.roi;
+        in.camera = w.camera;
+        in.origin_in_cam = cam_from_obj.translation();
+        equations[c].world_from_cam_rotation = rig_.cameras[c].world_from_cam.RotationMatrix();
+        SelectPixels(in, options_.selection, &equations[c], &counts);
+        s.times.select_ms += timer.ElapsedMilliseconds();
+      }
+
+      timer.Restart();
+      const FlowSolution solution = SolveFlow(equations, options_.solver);
+      if (level == 0) {
+        s.counts = counts;
+        s.equations = solution.equations;
+        s.initial_residual_px = solution.initial_rms_px;
+        s.final_residual_px = solution.final_rms_px;
+        s.share = counts.gradient_pixels() > 0
+                      ? double(counts.used) / double(counts.gradient_pixels())
+                      : 0.0;
+      }
+      if (!solution.ok) {
+        s.times.solve_ms += timer.ElapsedMilliseconds();
+        if (level == 0) s.last_update_px = std::numeric_limits<double>::infinity();
+        break;
+      }
+      Vector6d twist = solution.twist;
+      double update_px = UpdatePixels(pose, twist, level);
+      if (update_px > po.max_step_px) {
+        twist *= po.max_step_px / update_px;
+        update_px = po.max_step_px;
+      }
+      pose = ApplyTwist(pose, twist);
+      UNSEEN_LOG_DEBUG("level {} iteration {}: {} equations, rms {:.3f}->{:.3f} px, update {:.3f} px, "
+                       "twist [{:.5f} {:.5f} {:.5f} | {:.5f} {:.5f} {:.5f}]",
+                       level, iteration, solution.equations, solution.initial_rms_px,
+                       solution.final_rms_px, update_px, twist(0), twist(1), twist(2), twist(3),
+                       twist(4), twist(5));
+      ++s.iterations_per_level[level];
+      if (level == 0) s.last_update_px = update_px;
+      s.times.solve_ms += timer.ElapsedMilliseconds();
+      if (update_px < po.min_update_px) break;
+    }
+  }
+  s.correction_px = UpdatePixels(start, TwistBetween(start, pose), 0);
+  result.world_from_obj = pose;
+  result.confidence = Confidence(s);
+  if (!std::isfinite(result.confidence)) result.confidence = 0.0;
+  return result;
+}
+
+TrackResult Tracker::Track(const std::vector<cv::Mat>& images_per_camera) {
+  UNSEEN_CHECK(initialized_, "Tracker::Track called before Initialize()");
+  Timer total;
+  const std::vector<cv::Mat> images = CheckImages(images_per_camera);
+  const FailureOptions& f = options_.failure;
+
+  Timer timer;
+  const Rigid3d predicted =
+      status_ == TrackStatus::kLost ? last_good_ : predictor_->Predict(options_.frame_interval_s);
+  const double predict_ms = timer.ElapsedMilliseconds();
+
+  TrackResult r = AlignChecked(images, predicted, 0);
+  if (status_ == TrackStatus::kLost && f.search_when_lost && r.confidence < f.recover_confidence) {
+    // Local search around the last good pose (3.9): shifted starts along each world axis.
+    const double step = f.search_offset * sphere_radius_;
+    StageTimes times = r.summary.times;
+    int tried = 1;
+    for (int axis = 0; axis < 3; ++axis) {
+      for (double sign : {-1.0, 1.0}) {
+        Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+        offset(axis) = sign * step * (axis == 2 ? 2.0 : 1.0);
+        const Rigid3d candidate(last_good_.rotation(), last_good_.translation() + offset);
+        TrackResult c = AlignChecked(images, candidate, 0);
+        times += c.summary.times;
+        ++tried;
+        if (c.confidence > r.confidence) r = std::move(c);
+      }
+    }
+    r.summary.times = times;
+    r.summary.search_candidates = tried;
+  }
+
+  if (r.confidence >= f.lost_confidence) {
+    bad_frames_ = 0;
+  } else {
+    ++bad_frames_;
+  }
+  if (status_ == TrackStatus::kTracking) {
+    if (bad_frames_ >= f.lost_after_frames) {
+      status_ = TrackStatus::kLost;
+      predictor_->Reset(last_good_);
+    } else if (r.confidence >= f.lost_confidence) {
+      predictor_->Correct(r.world_from_obj);
+      last_good_ = r.world_from_obj;
+    }
+  } else if (r.confidence >= f.recover_confidence) {
+    status_ = TrackStatus::kTracking;
+    bad_frames_ = 0;
+    predictor_->Reset(r.world_from_obj);
+    last_good_ = r.world_from_obj;
+  }
+  r.status = status_;
+  if (status_ == TrackStatus::kLost) r.world_from_obj = last_good_;
+  if (!r.world_from_obj.IsValid()) {  // never report NaN
+    r.world_from_obj = last_good_;
+    r.confidence = 0.0;
+  }
+  r.summary.times.predict_ms = predict_ms;
+  r.summary.times.total_ms = total.ElapsedMilliseconds();
+  return r;
+}
+
+}  // namespace unseen

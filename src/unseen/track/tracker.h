@@ -1,0 +1,126 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// The 6-DoF tracker (SPEC 3): every frame, predict the pose (3.7), render the model at it
+// into every camera inside the bounding-sphere rectangle (3.5), pre-process (3.2), select
+// pixels (3.4, 3.6), solve the 6-DoF optical flow of all cameras at once (3.1.1, 3.8) and
+// update the pose (4.7), coarse to fine over a pyramid whose depth follows the object's
+// on-screen size (3.3), several render-solve rounds per level with IRLS on top (3.9); then
+// judge the result (confidence, status) and re-acquire a lost object (3.9).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "unseen/camera/camera.h"
+#include "unseen/geometry/rigid3.h"
+#include "unseen/io/pose_stream.h"
+#include "unseen/mesh/mesh.h"
+#include "unseen/render/rasterizer.h"
+#include "unseen/track/motion_predictor.h"
+#include "unseen/track/pixel_selection.h"
+#include "unseen/track/preprocess.h"
+#include "unseen/track/tracker_options.h"
+
+namespace unseen {
+
+// Wall-clock milliseconds spent in each stage of one frame.
+struct StageTimes {
+  double predict_ms = 0, render_ms = 0, preprocess_ms = 0, select_ms = 0, solve_ms = 0;
+  double total_ms = 0;  // the whole Track() call
+  StageTimes& operator+=(const StageTimes& o);
+};
+
+// What the alignment of one frame did.
+struct SolveSummary {
+  int num_levels = 0;                    // pyramid levels used
+  std::vector<int> iterations_per_level; // index = level (0 = full resolution)
+  SelectionCounts counts;                // last round at the finest level, all cameras
+  int equations = 0;                     // equations of that round
+  double initial_residual_px = 0.0;      // RMS normal flow |It|/|grad| before its update
+  double final_residual_px = 0.0;        // RMS residual of the linear model after it
+  double last_update_px = 0.0;           // image motion of that last update, px
+  double correction_px = 0.0;            // image motion of the whole correction this frame
+  double share = 0.0;                    // counts.used / counts.gradient_pixels()
+  int search_candidates = 0;             // poses tried by the re-acquisition search
+  StageTimes times;
+  // One line: levels, iterations, pixels used/rejected, residual, ms.
+  std::string BriefReport() const;
+};
+
+struct TrackResult {
+  Rigid3d world_from_obj;  // the estimate (the held last good pose while lost)
+  TrackStatus status = TrackStatus::kTracking;
+  double confidence = 0.0;  // [0, 1]
+  SolveSummary summary;
+  std::string BriefReport() const;
+};
+
+class Tracker {
+ public:
+  // `rig` gives the cameras (Rig::Check()); `model` the textured mesh in metres, in the
+  // object frame (Mesh::Check()); a mesh without texture is rendered with its material or
+  // vertex colours. Throws unseen::Error for an invalid rig, model or options.
+  Tracker(const Rig& rig, Mesh model, const TrackerOptions& options = {});
+  ~Tracker();
+
+  // Replaces the model between frames (e.g. by the on-line modeller); the pose is kept.
+  void SetModel(Mesh model);
+  // Starts tracking at `world_from_obj` (metres). Throws for a non-finite pose.
+  void Initialize(const Rigid3d& world_from_obj);
+  // A pose hint: forget the motion history and the lost state and continue from here.
+  void Reset(const Rigid3d& world_from_obj) { Initialize(world_from_obj); }
+
+  // Tracks one synchronized frame: one image per rig camera, in rig order, CV_32FC3 BGR in
+  // [0, 1] (CV_8UC3 is converted) of that camera's size. Throws unseen::Error before
+  // Initialize(), for a wrong number of images or a wrong size/type. An object out of view
+  // is reported as lost, never as NaN.
+  TrackResult Track(const std::vector<cv::Mat>& images_per_camera);
+
+  // Aligns the model to the frame starting from `world_from_obj` without touching the
+  // tracking state (no prediction, no status): the multi-scale render-solve loop and the
+  // confidence. `num_levels` > 0 overrides the automatic pyramid depth.
+  TrackResult Align(const std::vector<cv::Mat>& images_per_camera, const Rigid3d& world_from_obj,
+                    int num_levels = 0);
+
+  // Pyramid levels the alignment would use for the object at `world_from_obj`.
+  int NumLevelsFor(const Rigid3d& world_from_obj) const;
+
+  const Rig& rig() const { return rig_; }
+  const Mesh& model() const { return *model_; }
+  const TrackerOptions& options() const { return options_; }
+  const MotionPredictor& predictor() const { return *predictor_; }
+  bool initialized() const { return initialized_; }
+  TrackStatus status() const { return status_; }
+
+ private:
+  struct CameraWork;
+  std::vector<cv::Mat> CheckImages(const std::vector<cv::Mat>& images) const;
+  TrackResult AlignChecked(const std::vector<cv::Mat>& images, const Rigid3d& start,
+                           int num_levels);
+  double Confidence(const SolveSummary& summary) const;
+  // Renders the model into `work`'s region at `cam_from_obj` and composes the virtual image
+  // (input with the render over it), its mask and depth; false when nothing was rendered.
+  bool RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, CameraWork* work,
+                     StageTimes* times);
+  // Image motion (pixels at `level`, largest over cameras) of the object under `twist`.
+  double UpdatePixels(const Rigid3d& world_from_obj, const Vector6d& twist, int level) const;
+
+  Rig rig_;
+  std::vector<Rigid3d> cam_from_world_;
+  std::shared_ptr<const Mesh> model_;
+  Eigen::Vector3d sphere_centre_ = Eigen::Vector3d::Zero();  // object frame
+  double sphere_radius_ = 0.0;
+  TrackerOptions options_;
+  std::unique_ptr<MotionPredictor> predictor_;
+  std::vector<std::unique_ptr<CameraWork>> work_;
+
+  bool initialized_ = false;
+  TrackStatus status_ = TrackStatus::kTracking;
+  int bad_frames_ = 0;
+  Rigid3d last_good_;
+};
+
+}  // namespace unseen

@@ -1,0 +1,222 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/track/tracker_options.h"
+
+#include <cmath>
+#include <functional>
+#include <map>
+
+#include <yaml-cpp/yaml.h>
+
+#include "unseen/util/error.h"
+
+namespace unseen {
+
+void PyramidOptions::Check() const {
+  UNSEEN_CHECK(max_levels >= 1 && max_levels <= 8, "pyramid.max_levels {} must be in [1, 8]",
+               max_levels);
+  UNSEEN_CHECK(min_object_px >= 4.0 && std::isfinite(min_object_px),
+               "pyramid.min_object_px {} must be >= 4", min_object_px);
+  UNSEEN_CHECK(max_iterations_per_level >= 1 && max_iterations_per_level <= 100,
+               "pyramid.max_iterations_per_level {} must be in [1, 100]",
+               max_iterations_per_level);
+  UNSEEN_CHECK(min_update_px >= 0.0 && std::isfinite(min_update_px),
+               "pyramid.min_update_px {} must be >= 0", min_update_px);
+  UNSEEN_CHECK(max_step_px > 0.0 && std::isfinite(max_step_px),
+               "pyramid.max_step_px {} must be > 0", max_step_px);
+  UNSEEN_CHECK(rim_px >= 0 && rim_px <= 20, "pyramid.rim_px {} must be in [0, 20]", rim_px);
+  UNSEEN_CHECK(supersampled_levels >= 0 && supersampled_levels <= 8,
+               "pyramid.supersampled_levels {} must be in [0, 8]", supersampled_levels);
+}
+
+void FailureOptions::Check() const {
+  UNSEEN_CHECK(min_share >= 0.0 && good_share > min_share && good_share <= 1.0,
+               "failure: need 0 <= min_share ({}) < good_share ({}) <= 1", min_share, good_share);
+  UNSEEN_CHECK(good_residual_px >= 0.0 && bad_residual_px > good_residual_px,
+               "failure: need 0 <= good_residual_px ({}) < bad_residual_px ({})",
+               good_residual_px, bad_residual_px);
+  UNSEEN_CHECK(good_update_px >= 0.0 && bad_update_px > good_update_px,
+               "failure: need 0 <= good_update_px ({}) < bad_update_px ({})", good_update_px,
+               bad_update_px);
+  UNSEEN_CHECK(min_pixels >= 6, "failure.min_pixels {} must be >= 6", min_pixels);
+  UNSEEN_CHECK(lost_confidence >= 0.0 && lost_confidence <= 1.0,
+               "failure.lost_confidence {} must be in [0, 1]", lost_confidence);
+  UNSEEN_CHECK(recover_confidence >= lost_confidence && recover_confidence <= 1.0,
+               "failure.recover_confidence {} must be in [lost_confidence = {}, 1]",
+               recover_confidence, lost_confidence);
+  UNSEEN_CHECK(lost_after_frames >= 1, "failure.lost_after_frames {} must be >= 1",
+               lost_after_frames);
+  UNSEEN_CHECK(search_offset > 0.0 && search_offset <= 10.0,
+               "failure.search_offset {} must be in (0, 10]", search_offset);
+}
+
+void TrackerOptions::Check() const {
+  preprocess.Check();
+  selection.Check();
+  solver.Check();
+  pyramid.Check();
+  predictor.Check();
+  failure.Check();
+  UNSEEN_CHECK(frame_interval_s > 0.0 && std::isfinite(frame_interval_s),
+               "frame_interval_s {} must be > 0", frame_interval_s);
+}
+
+namespace {
+
+using Setter = std::function<void(const YAML::Node&, const std::string&)>;
+
+template <typename T>
+Setter Field(T* field) {
+  return [field](const YAML::Node& node, const std::string& where) {
+    try {
+      *field = node.as<T>();
+    } catch (const YAML::Exception&) {
+      ThrowError("{}: value '{}' has the wrong type", where, YAML::Dump(node));
+    }
+  };
+}
+
+template <typename E>
+Setter EnumField(E* field, E (*parse)(const std::string&, const std::string&)) {
+  return [field, parse](const YAML::Node& node, const std::string& where) {
+    std::string text;
+    try {
+      text = node.as<std::string>();
+    } catch (const YAML::Exception&) {
+      ThrowError("{}: value '{}' is not a string", where, YAML::Dump(node));
+    }
+    *field = parse(text, where);
+  };
+}
+
+void ApplySection(const YAML::Node& node, const std::string& where,
+                  const std::map<std::string, Setter>& fields) {
+  UNSEEN_CHECK(node.IsMap(), "{}: expected a map of settings", where);
+  for (const auto& kv : node) {
+    const std::string key = kv.first.as<std::string>();
+    const auto it = fields.find(key);
+    if (it == fields.end()) {
+      std::string known;
+      for (const auto& f : fields) known += (known.empty() ? "" : ", ") + f.first;
+      ThrowError("{}: unknown key '{}' (known: {})", where, key, known);
+    }
+    it->second(kv.second, where + "." + key);
+  }
+}
+
+void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
+  if (root.IsNull()) return;
+  PreprocessOptions& pp = o->preprocess;
+  PixelSelectionOptions& se = o->selection;
+  FlowSolverOptions& so = o->solver;
+  PyramidOptions& py = o->pyramid;
+  MotionPredictorOptions& pr = o->predictor;
+  FailureOptions& fa = o->failure;
+  const std::map<std::string, std::map<std::string, Setter>> sections = {
+      {"preprocess",
+       {{"use_linf", Field(&pp.use_linf)},
+        {"linf_sigma_px", Field(&pp.linf_sigma_px)},
+        {"min_linf_sigma_px", Field(&pp.min_linf_sigma_px)},
+        {"linf_epsilon", Field(&pp.linf_epsilon)},
+        {"blur_sigma_px", Field(&pp.blur_sigma_px)}}},
+      {"selection",
+       {{"color_mode", EnumField(&se.color_mode, &ParseColorMode)},
+        {"use_gradient_threshold", Field(&se.use_gradient_threshold)},
+        {"min_gradient_sq", Field(&se.min_gradient_sq)},
+        {"use_normal_flow_bound", Field(&se.use_normal_flow_bound)},
+        {"max_normal_flow_px", Field(&se.max_normal_flow_px)},
+        {"use_occlusion_rejection", Field(&se.use_occlusion_rejection)},
+        {"occlusion_min_gradient_sq", Field(&se.occlusion_min_gradient_sq)},
+        {"occlusion_max_angle_rad", Field(&se.occlusion_max_angle_rad)},
+        {"occlusion_max_magnitude_diff", Field(&se.occlusion_max_magnitude_diff)},
+        {"min_eigen_ratio", Field(&se.min_eigen_ratio)}}},
+      {"solver",
+       {{"kernel", EnumField(&so.kernel, &ParseRobustKernel)},
+        {"kernel_width", Field(&so.kernel_width)},
+        {"irls_iterations", Field(&so.irls_iterations)},
+        {"min_scale_px", Field(&so.min_scale_px)},
+        {"min_equations", Field(&so.min_equations)},
+        {"damping", Field(&so.damping)}}},
+      {"pyramid",
+       {{"max_levels", Field(&py.max_levels)},
+        {"min_object_px", Field(&py.min_object_px)},
+        {"max_iterations_per_level", Field(&py.max_iterations_per_level)},
+        {"min_update_px", Field(&py.min_update_px)},
+        {"max_step_px", Field(&py.max_step_px)},
+        {"rim_px", Field(&py.rim_px)},
+        {"supersampled_levels", Field(&py.supersampled_levels)}}},
+      {"predictor",
+       {{"type", EnumField(&pr.type, &ParsePredictorType)},
+        {"linear_accel_sigma", Field(&pr.linear_accel_sigma)},
+        {"angular_accel_sigma", Field(&pr.angular_accel_sigma)},
+        {"position_sigma", Field(&pr.position_sigma)},
+        {"rotation_sigma", Field(&pr.rotation_sigma)}}},
+      {"failure",
+       {{"min_share", Field(&fa.min_share)},
+        {"good_share", Field(&fa.good_share)},
+        {"good_residual_px", Field(&fa.good_residual_px)},
+        {"bad_residual_px", Field(&fa.bad_residual_px)},
+        {"good_update_px", Field(&fa.good_update_px)},
+        {"bad_update_px", Field(&fa.bad_update_px)},
+        {"min_pixels", Field(&fa.min_pixels)},
+        {"lost_confidence", Field(&fa.lost_confidence)},
+        {"lost_after_frames", Field(&fa.lost_after_frames)},
+        {"recover_confidence", Field(&fa.recover_confidence)},
+        {"search_when_lost", Field(&fa.search_when_lost)},
+        {"search_offset", Field(&fa.search_offset)}}},
+  };
+  UNSEEN_CHECK(root.IsMap(), "{}: expected a map at the top level", what);
+  for (const auto& kv : root) {
+    const std::string key = kv.first.as<std::string>();
+    if (key == "frame_interval_s") {
+      Field(&o->frame_interval_s)(kv.second, what + ": " + key);
+      continue;
+    }
+    const auto it = sections.find(key);
+    if (it == sections.end()) {
+      ThrowError("{}: unknown section '{}' (known: preprocess, selection, solver, pyramid, "
+                 "predictor, failure, frame_interval_s)",
+                 what, key);
+    }
+    ApplySection(kv.second, what + ": " + key, it->second);
+  }
+}
+
+}  // namespace
+
+TrackerOptions ParseTrackerOptions(const std::string& yaml_text, const std::string& what) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    ThrowError("{}: malformed YAML: {}", what, e.what());
+  }
+  TrackerOptions options;
+  Apply(root, what, &options);
+  try {
+    options.Check();
+  } catch (const Error& e) {
+    ThrowError("{}: {}", what, e.what());
+  }
+  return options;
+}
+
+TrackerOptions LoadTrackerOptions(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    ThrowError("{}: cannot read the tracker options file", path);
+  } catch (const YAML::Exception& e) {
+    ThrowError("{}: malformed YAML: {}", path, e.what());
+  }
+  TrackerOptions options;
+  Apply(root, path, &options);
+  try {
+    options.Check();
+  } catch (const Error& e) {
+    ThrowError("{}: {}", path, e.what());
+  }
+  return options;
+}
+
+}  // namespace unseen
