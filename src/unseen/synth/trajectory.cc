@@ -28,7 +28,7 @@ Eigen::Quaterniond ComposeRotations(const std::vector<AxisRotation>& steps,
     UNSEEN_CHECK(std::isfinite(step.angle_deg), "{}: step {} has a non-finite angle {}", what, i,
                  step.angle_deg);
     const Eigen::Vector3d w = step.axis / n * (step.angle_deg * M_PI / 180.0);
-    r = ExpSO3(w) * r;
+    r = r * ExpSO3(w);
   }
   return r.normalized();
 }

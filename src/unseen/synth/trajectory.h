@@ -33,8 +33,10 @@ struct AxisRotation {
   double angle_deg = 0.0;
 };
 
-// The rotation of applying `steps` in order, each about the fixed (world) axes:
-// R = R_n ... R_2 R_1. Throws unseen::Error naming `what` for a zero or non-finite axis or
+// The rotation of applying `steps` in order, each about the object's own axes as turned by
+// the steps before it (intrinsic rotations): R = R_1 R_2 ... R_n. This is the convention
+// of the development sequences' scene.json ("initial_rotation": x 20 deg then y 30 deg is
+// Rx(20) Ry(30)). Throws unseen::Error naming `what` for a zero or non-finite axis or
 // a non-finite angle.
 Eigen::Quaterniond ComposeRotations(const std::vector<AxisRotation>& steps,
                                     const std::string& what = "rotation");
