@@ -1,16 +1,16 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/camera/calibration_io.h"
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
-
-#include <fmt/format.h>
-#include <fmt/ranges.h>
 #include <opencv2/core.hpp>
-#include <yaml-cpp/yaml.h>
+#include <sstream>
 
 #include "unseen/util/error.h"
 
@@ -36,8 +36,7 @@ std::string LeftTrimmed(const std::string& text) {
 PinholeCamera MakeCamera(const std::vector<double>& k, int width, int height,
                          const std::vector<double>& distortion, const std::string& path) {
   for (size_t i = 0; i < k.size(); ++i) {
-    UNSEEN_CHECK(std::isfinite(k[i]), "{}: field \"camera_matrix\" value {} is {}", path, i,
-                 k[i]);
+    UNSEEN_CHECK(std::isfinite(k[i]), "{}: field \"camera_matrix\" value {} is {}", path, i, k[i]);
   }
   for (size_t i = 0; i < distortion.size(); ++i) {
     UNSEEN_CHECK(std::isfinite(distortion[i]),
@@ -76,8 +75,8 @@ int ReadInt(const cv::FileStorage& fs, const char* key, const std::string& path)
   return static_cast<int>(node);
 }
 
-std::vector<double> ReadMatrix(const cv::FileStorage& fs, const char* key,
-                               const std::string& path, bool required, int rows, int cols) {
+std::vector<double> ReadMatrix(const cv::FileStorage& fs, const char* key, const std::string& path,
+                               bool required, int rows, int cols) {
   const cv::FileNode node = fs[key];
   if (node.empty() || node.isNone()) {
     UNSEEN_CHECK(!required, "{}: field \"{}\" is missing", path, key);
@@ -90,8 +89,8 @@ std::vector<double> ReadMatrix(const cv::FileStorage& fs, const char* key,
     UNSEEN_CHECK(m.rows == rows && m.cols == cols, "{}: field \"{}\" is {}x{}, expected {}x{}",
                  path, key, m.rows, m.cols, rows, cols);
   } else {
-    UNSEEN_CHECK(m.rows == 1 || m.cols == 1, "{}: field \"{}\" is {}x{}, expected a vector",
-                 path, key, m.rows, m.cols);
+    UNSEEN_CHECK(m.rows == 1 || m.cols == 1, "{}: field \"{}\" is {}x{}, expected a vector", path,
+                 key, m.rows, m.cols);
   }
   cv::Mat d;
   m.convertTo(d, CV_64F);
@@ -101,8 +100,7 @@ std::vector<double> ReadMatrix(const cv::FileStorage& fs, const char* key,
 
 PinholeCamera ReadOpenCv(cv::FileStorage& fs, const std::string& path) {
   const std::vector<double> k = ReadMatrix(fs, "camera_matrix", path, true, 3, 3);
-  const std::vector<double> dist =
-      ReadMatrix(fs, "distortion_coefficients", path, false, -1, -1);
+  const std::vector<double> dist = ReadMatrix(fs, "distortion_coefficients", path, false, -1, -1);
   const int width = ReadInt(fs, "image_width", path);
   const int height = ReadInt(fs, "image_height", path);
   return MakeCamera(k, width, height, dist, path);
@@ -112,8 +110,8 @@ PinholeCamera LoadOpenCvText(const std::string& path, const std::string& text) {
   try {
     std::string content = text;
     const std::string trimmed = LeftTrimmed(text);
-    const bool yaml_without_header = trimmed.rfind("%YAML", 0) != 0 &&
-                                     trimmed.rfind("<", 0) != 0 && trimmed.rfind("{", 0) != 0;
+    const bool yaml_without_header =
+        trimmed.rfind("%YAML", 0) != 0 && trimmed.rfind("<", 0) != 0 && trimmed.rfind("{", 0) != 0;
     // cv::FileStorage needs the %YAML:1.0 header that OpenCV writes; hand-written files
     // often lack it.
     if (yaml_without_header) content = "%YAML:1.0\n" + trimmed;
@@ -254,7 +252,8 @@ void SaveOpenCvCalibration(const std::string& path, const PinholeCamera& camera)
     fs << "camera_matrix" << k;
     std::vector<double> dist = camera.distortion;
     if (dist.empty()) dist.assign(5, 0.0);
-    fs << "distortion_coefficients" << cv::Mat(dist, true).reshape(1, static_cast<int>(dist.size()));
+    fs << "distortion_coefficients"
+       << cv::Mat(dist, true).reshape(1, static_cast<int>(dist.size()));
     fs.release();
   } catch (const cv::Exception& e) {
     ThrowError("{}: cannot write calibration file: {}", path, e.what());

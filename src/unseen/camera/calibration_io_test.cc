@@ -1,12 +1,12 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/camera/calibration_io.h"
 
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
 #include <limits>
-
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
 #include "unseen/util/error.h"
@@ -19,9 +19,8 @@ using ::testing::HasSubstr;
 
 fs::path TestDir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() /
-                       (std::string("unseen_calibration_") + info->test_suite_name() + "_" +
-                        info->name());
+  const fs::path dir = fs::temp_directory_path() / (std::string("unseen_calibration_") +
+                                                    info->test_suite_name() + "_" + info->name());
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
@@ -50,8 +49,8 @@ void ExpectError(Fn fn, const std::vector<std::string>& substrings) {
   }
 }
 
-void ExpectCamera(const PinholeCamera& c, int w, int h, double fx, double fy, double cx,
-                  double cy, const std::vector<double>& dist) {
+void ExpectCamera(const PinholeCamera& c, int w, int h, double fx, double fy, double cx, double cy,
+                  const std::vector<double>& dist) {
   EXPECT_EQ(c.width, w);
   EXPECT_EQ(c.height, h);
   EXPECT_DOUBLE_EQ(c.fx, fx);
@@ -126,9 +125,10 @@ TEST(CalibrationIo, ReadsRosCameraInfo) {
   ExpectCamera(LoadCameraCalibration(path), 1280, 720, 911.5, 912.25, 640.2, 361.75, dist);
   ExpectCamera(LoadRosCameraInfo(path), 1280, 720, 911.5, 912.25, 640.2, 361.75, dist);
   // Message-style field names, no distortion.
-  const std::string msg = WriteText(TestDir() / "msg.yaml",
-                                    "height: 480\nwidth: 640\ndistortion_model: plumb_bob\n"
-                                    "D: [0, 0, 0, 0, 0]\nK: [500, 0, 319.5, 0, 500, 239.5, 0, 0, 1]\n");
+  const std::string msg =
+      WriteText(TestDir() / "msg.yaml",
+                "height: 480\nwidth: 640\ndistortion_model: plumb_bob\n"
+                "D: [0, 0, 0, 0, 0]\nK: [500, 0, 319.5, 0, 500, 239.5, 0, 0, 1]\n");
   ExpectCamera(LoadCameraCalibration(msg), 640, 480, 500, 500, 319.5, 239.5, {});
 }
 
@@ -181,11 +181,13 @@ TEST(CalibrationIo, RejectsWrongMatrixSize) {
   ExpectError([&] { LoadCameraCalibration(WriteText(dir / "a.yaml", text)); },
               {"a.yaml", "\"camera_matrix\"", "1x9", "3x3"});
   std::string ros = kRosYaml;
-  ros = Replace(ros, "data: [911.5, 0, 640.2, 0, 912.25, 361.75, 0, 0, 1]", "data: [911.5, 0, 640.2, 0, 912.25, 361.75]");
+  ros = Replace(ros, "data: [911.5, 0, 640.2, 0, 912.25, 361.75, 0, 0, 1]",
+                "data: [911.5, 0, 640.2, 0, 912.25, 361.75]");
   ExpectError([&] { LoadCameraCalibration(WriteText(dir / "b.yaml", ros)); },
               {"b.yaml", "\"camera_matrix\"", "6 values"});
   std::string dist = kRosYaml;
-  dist = Replace(dist, "cols: 5\n  data: [0.1, -0.2, 0.001, 0.002, 0]", "cols: 3\n  data: [0.1, -0.2, 0.001]");
+  dist = Replace(dist, "cols: 5\n  data: [0.1, -0.2, 0.001, 0.002, 0]",
+                 "cols: 3\n  data: [0.1, -0.2, 0.001]");
   ExpectError([&] { LoadCameraCalibration(WriteText(dir / "c.yaml", dist)); },
               {"c.yaml", "distortion_coefficients", "3 values"});
 }

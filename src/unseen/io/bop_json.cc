@@ -1,12 +1,12 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/io/bop_json.h"
 
+#include <fmt/format.h>
+
 #include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-
-#include <fmt/format.h>
 
 #include "unseen/util/error.h"
 
@@ -63,13 +63,13 @@ int ParseFrameId(const std::string& key, const std::string& what) {
   return id;
 }
 
-std::vector<double> GetNumbers(const nlohmann::json& object, const std::string& key,
-                               size_t size, const std::string& what) {
+std::vector<double> GetNumbers(const nlohmann::json& object, const std::string& key, size_t size,
+                               const std::string& what) {
   UNSEEN_CHECK(object.is_object(), "{}: expected a JSON object, got {}", what, Brief(object));
   const auto it = object.find(key);
   UNSEEN_CHECK(it != object.end(), "{}: field \"{}\" is missing", what, key);
-  UNSEEN_CHECK(it->is_array(), "{}: field \"{}\" must be an array of {} numbers, got {}", what,
-               key, size, Brief(*it));
+  UNSEEN_CHECK(it->is_array(), "{}: field \"{}\" must be an array of {} numbers, got {}", what, key,
+               size, Brief(*it));
   UNSEEN_CHECK(it->size() == size, "{}: field \"{}\" has {} values, expected {}: {}", what, key,
                it->size(), size, Brief(*it));
   std::vector<double> values;

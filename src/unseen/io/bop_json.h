@@ -6,10 +6,9 @@
 // pose_stream.cc; not part of the public io interface.
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "unseen/geometry/rigid3.h"
 
@@ -29,8 +28,8 @@ int ParseFrameId(const std::string& key, const std::string& what);
 
 // `object[key]` as exactly `size` finite numbers. `what` describes where the object is
 // (e.g. "scene_camera.json frame 3"). Throws naming what, key and the offending value.
-std::vector<double> GetNumbers(const nlohmann::json& object, const std::string& key,
-                               size_t size, const std::string& what);
+std::vector<double> GetNumbers(const nlohmann::json& object, const std::string& key, size_t size,
+                               const std::string& what);
 
 // `object[key]` as a finite number; throws naming what and key when missing or not a number.
 double GetNumber(const nlohmann::json& object, const std::string& key, const std::string& what);

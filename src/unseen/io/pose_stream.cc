@@ -1,15 +1,15 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/io/pose_stream.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
-#include <set>
-
-#include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "unseen/io/bop_json.h"
 #include "unseen/util/error.h"
@@ -24,7 +24,8 @@ constexpr double kQuaternionNormTolerance = 1e-3;
 
 std::string LowerExtension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return ext;
 }
 
@@ -40,8 +41,8 @@ std::vector<std::string> SplitCsv(const std::string& line) {
   size_t start = 0;
   while (true) {
     const size_t comma = line.find(',', start);
-    fields.push_back(Trim(line.substr(start, comma == std::string::npos ? std::string::npos
-                                                                         : comma - start)));
+    fields.push_back(
+        Trim(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
@@ -65,8 +66,8 @@ PoseRecord MakeRecord(double frame, double time_s, const std::string& status, do
   UNSEEN_CHECK(std::isfinite(frame) && frame >= 0 && frame == std::floor(frame) && frame < 2e9,
                "{}: field \"frame\" is {}, expected a non-negative integer", where, frame);
   record.frame = static_cast<int>(frame);
-  UNSEEN_CHECK(std::isfinite(time_s), "{}: field \"time_s\" is {}, expected a finite number",
-               where, time_s);
+  UNSEEN_CHECK(std::isfinite(time_s), "{}: field \"time_s\" is {}, expected a finite number", where,
+               time_s);
   record.time_s = time_s;
   record.status = ParseTrackStatus(status, where + ": field \"status\"");
   UNSEEN_CHECK(std::isfinite(confidence) && confidence >= 0.0 && confidence <= 1.0,
@@ -129,8 +130,8 @@ std::vector<PoseRecord> ReadCsv(const std::string& path, std::istream& in) {
     const double q[4] = {number("qx"), number("qy"), number("qz"), number("qw")};
     std::optional<double> process_ms;
     if (process_it != column.end() && !fields[process_it->second].empty()) {
-      process_ms = ParseDouble(fields[process_it->second],
-                               fmt::format("{}: field \"process_ms\"", where));
+      process_ms =
+          ParseDouble(fields[process_it->second], fmt::format("{}: field \"process_ms\"", where));
     }
     records.push_back(MakeRecord(number("frame"), number("time_s"), fields[column.at("status")],
                                  number("confidence"), t, q, process_ms, where));
@@ -158,8 +159,8 @@ std::vector<PoseRecord> ReadJsonLines(const std::string& path, std::istream& in)
     auto number = [&](const char* name) {
       const auto it = object.find(name);
       UNSEEN_CHECK(it != object.end(), "{}: field \"{}\" is missing", where, name);
-      UNSEEN_CHECK(it->is_number(), "{}: field \"{}\" is {}, expected a finite number", where,
-                   name, it->dump());
+      UNSEEN_CHECK(it->is_number(), "{}: field \"{}\" is {}, expected a finite number", where, name,
+                   it->dump());
       return it->get<double>();
     };
     const auto status_it = object.find("status");
@@ -172,29 +173,31 @@ std::vector<PoseRecord> ReadJsonLines(const std::string& path, std::istream& in)
     if (object.contains("process_ms") && !object["process_ms"].is_null()) {
       process_ms = number("process_ms");
     }
-    records.push_back(MakeRecord(number("frame"), number("time_s"),
-                                 status_it->get<std::string>(), number("confidence"), t, q,
-                                 process_ms, where));
+    records.push_back(MakeRecord(number("frame"), number("time_s"), status_it->get<std::string>(),
+                                 number("confidence"), t, q, process_ms, where));
   }
   UNSEEN_CHECK(any_line, "{}: empty file, expected one JSON object per line", path);
   return records;
 }
 
 void CheckWritable(const PoseRecord& r, const std::string& path) {
-  UNSEEN_CHECK(r.world_from_obj.IsValid(), "{}: frame {}: refusing to write invalid pose {}",
-               path, r.frame, r.world_from_obj.ToString());
+  UNSEEN_CHECK(r.world_from_obj.IsValid(), "{}: frame {}: refusing to write invalid pose {}", path,
+               r.frame, r.world_from_obj.ToString());
   UNSEEN_CHECK(std::isfinite(r.time_s) && std::isfinite(r.confidence),
-               "{}: frame {}: time_s {} and confidence {} must be finite", path, r.frame,
-               r.time_s, r.confidence);
+               "{}: frame {}: time_s {} and confidence {} must be finite", path, r.frame, r.time_s,
+               r.confidence);
 }
 
 }  // namespace
 
 const char* ToString(TrackStatus status) {
   switch (status) {
-    case TrackStatus::kTracking: return "tracking";
-    case TrackStatus::kLost: return "lost";
-    case TrackStatus::kSearching: return "searching";
+    case TrackStatus::kTracking:
+      return "tracking";
+    case TrackStatus::kLost:
+      return "lost";
+    case TrackStatus::kSearching:
+      return "searching";
   }
   return "unknown";
 }
@@ -228,15 +231,19 @@ void PoseStreamWriter::Write(const PoseRecord& r) {
   const Eigen::Quaterniond& q = r.world_from_obj.rotation();
   if (csv_) {
     *out_ << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{}\n", r.frame, r.time_s,
-                         ToString(r.status), r.confidence, t.x(), t.y(), t.z(), q.x(), q.y(),
-                         q.z(), q.w(), r.process_ms ? fmt::format("{}", *r.process_ms) : "");
+                         ToString(r.status), r.confidence, t.x(), t.y(), t.z(), q.x(), q.y(), q.z(),
+                         q.w(), r.process_ms ? fmt::format("{}", *r.process_ms) : "");
   } else {
-    nlohmann::json line = {{"frame", r.frame},   {"time_s", r.time_s},
+    nlohmann::json line = {{"frame", r.frame},
+                           {"time_s", r.time_s},
                            {"status", ToString(r.status)},
                            {"confidence", r.confidence},
-                           {"tx", t.x()},        {"ty", t.y()},
-                           {"tz", t.z()},        {"qx", q.x()},
-                           {"qy", q.y()},        {"qz", q.z()},
+                           {"tx", t.x()},
+                           {"ty", t.y()},
+                           {"tz", t.z()},
+                           {"qx", q.x()},
+                           {"qy", q.y()},
+                           {"qz", q.z()},
                            {"qw", q.w()}};
     if (r.process_ms) line["process_ms"] = *r.process_ms;
     *out_ << line.dump() << '\n';
@@ -264,8 +271,7 @@ std::vector<PoseRecord> ReadPoseStream(const std::string& path) {
   std::vector<PoseRecord> records = first == '{' ? ReadJsonLines(path, in) : ReadCsv(path, in);
   std::set<int> seen;
   for (const PoseRecord& r : records) {
-    UNSEEN_CHECK(seen.insert(r.frame).second, "{}: frame {} appears more than once", path,
-                 r.frame);
+    UNSEEN_CHECK(seen.insert(r.frame).second, "{}: frame {} appears more than once", path, r.frame);
   }
   return records;
 }
@@ -307,7 +313,8 @@ std::vector<PoseRecord> ReadBopSceneGtAsPoses(const std::string& path,
       record.time_s = frame / fps;
       record.status = TrackStatus::kTracking;
       record.confidence = 1.0;
-      record.world_from_obj = world_from_cam * bop::GetPoseMm(entry, "cam_R_m2c", "cam_t_m2c", what);
+      record.world_from_obj =
+          world_from_cam * bop::GetPoseMm(entry, "cam_R_m2c", "cam_t_m2c", what);
       records.push_back(record);
       break;
     }

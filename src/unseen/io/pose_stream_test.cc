@@ -1,13 +1,13 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/io/pose_stream.h"
 
-#include <filesystem>
-#include <fstream>
-#include <random>
-
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "unseen/util/error.h"
 
@@ -21,9 +21,8 @@ using ::testing::HasSubstr;
 // A fresh directory per test under the system temp dir.
 fs::path TestDir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() /
-                       (std::string("unseen_pose_stream_") + info->test_suite_name() + "_" +
-                        info->name());
+  const fs::path dir = fs::temp_directory_path() / (std::string("unseen_pose_stream_") +
+                                                    info->test_suite_name() + "_" + info->name());
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
@@ -138,9 +137,10 @@ TEST(PoseStream, ReadsWithoutProcessMsAndWithExtraColumns) {
   EXPECT_EQ(b[0].world_from_obj.translation(), Eigen::Vector3d(1, 2, 3));
   EXPECT_DOUBLE_EQ(*b[0].process_ms, 12.5);
 
-  WriteText(dir / "c.jsonl",
-            R"({"frame":2,"time_s":0.1,"status":"tracking","confidence":1,"tx":0,"ty":0,"tz":1,"qx":0,"qy":0,"qz":0,"qw":1,"extra":[1,2]})"
-            "\n");
+  WriteText(
+      dir / "c.jsonl",
+      R"({"frame":2,"time_s":0.1,"status":"tracking","confidence":1,"tx":0,"ty":0,"tz":1,"qx":0,"qy":0,"qz":0,"qw":1,"extra":[1,2]})"
+      "\n");
   const std::vector<PoseRecord> c = ReadPoseStream((dir / "c.jsonl").string());
   ASSERT_EQ(c.size(), 1u);
   EXPECT_EQ(c[0].frame, 2);
@@ -156,9 +156,10 @@ TEST(PoseStream, RejectsNaN) {
 
 TEST(PoseStream, RejectsNullInJsonLines) {
   const fs::path path = TestDir() / "null.jsonl";
-  WriteText(path,
-            R"({"frame":0,"time_s":0,"status":"tracking","confidence":1,"tx":0,"ty":null,"tz":1,"qx":0,"qy":0,"qz":0,"qw":1})"
-            "\n");
+  WriteText(
+      path,
+      R"({"frame":0,"time_s":0,"status":"tracking","confidence":1,"tx":0,"ty":null,"tz":1,"qx":0,"qy":0,"qz":0,"qw":1})"
+      "\n");
   ExpectError([&] { ReadPoseStream(path.string()); }, {"null.jsonl:1", "\"ty\"", "null"});
 }
 
@@ -179,8 +180,10 @@ TEST(PoseStream, RejectsMissingColumn) {
   WriteText(path, "frame,time_s,status,confidence,tx,ty,qx,qy,qz,qw\n0,0,tracking,1,0,0,0,0,0,1\n");
   ExpectError([&] { ReadPoseStream(path.string()); }, {"m.csv:1", "\"tz\""});
   const fs::path jsonl = path.parent_path() / "m.jsonl";
-  WriteText(jsonl, R"({"frame":0,"time_s":0,"status":"tracking","tx":0,"ty":0,"tz":1,"qx":0,"qy":0,"qz":0,"qw":1})"
-                   "\n");
+  WriteText(
+      jsonl,
+      R"({"frame":0,"time_s":0,"status":"tracking","tx":0,"ty":0,"tz":1,"qx":0,"qy":0,"qz":0,"qw":1})"
+      "\n");
   ExpectError([&] { ReadPoseStream(jsonl.string()); }, {"m.jsonl:1", "\"confidence\"", "missing"});
 }
 
@@ -198,16 +201,21 @@ TEST(PoseStream, RejectsMalformedLines) {
   WriteText(dir / "short.csv", std::string(kHeader) + "0,0,tracking,1,0,0\n");
   ExpectError([&] { ReadPoseStream((dir / "short.csv").string()); }, {"short.csv:2", "fields"});
   WriteText(dir / "word.csv", std::string(kHeader) + "0,0,tracking,1,abc,0,1,0,0,0,1\n");
-  ExpectError([&] { ReadPoseStream((dir / "word.csv").string()); }, {"word.csv:2", "\"tx\"", "abc"});
+  ExpectError([&] { ReadPoseStream((dir / "word.csv").string()); },
+              {"word.csv:2", "\"tx\"", "abc"});
   WriteText(dir / "bad.jsonl", "{\"frame\": 0,\n");
-  ExpectError([&] { ReadPoseStream((dir / "bad.jsonl").string()); }, {"bad.jsonl:1", "malformed JSON"});
+  ExpectError([&] { ReadPoseStream((dir / "bad.jsonl").string()); },
+              {"bad.jsonl:1", "malformed JSON"});
   WriteText(dir / "conf.csv", std::string(kHeader) + "0,0,tracking,1.5,0,0,1,0,0,0,1\n");
-  ExpectError([&] { ReadPoseStream((dir / "conf.csv").string()); }, {"conf.csv:2", "confidence", "1.5"});
+  ExpectError([&] { ReadPoseStream((dir / "conf.csv").string()); },
+              {"conf.csv:2", "confidence", "1.5"});
   WriteText(dir / "dup.csv", std::string(kHeader) + "0,0,tracking,1,0,0,1,0,0,0,1\n" +
                                  "0,0,tracking,1,0,0,1,0,0,0,1\n");
-  ExpectError([&] { ReadPoseStream((dir / "dup.csv").string()); }, {"dup.csv", "frame 0", "more than once"});
+  ExpectError([&] { ReadPoseStream((dir / "dup.csv").string()); },
+              {"dup.csv", "frame 0", "more than once"});
   WriteText(dir / "frac.csv", std::string(kHeader) + "1.5,0,tracking,1,0,0,1,0,0,0,1\n");
-  ExpectError([&] { ReadPoseStream((dir / "frac.csv").string()); }, {"frac.csv:2", "\"frame\"", "1.5"});
+  ExpectError([&] { ReadPoseStream((dir / "frac.csv").string()); },
+              {"frac.csv:2", "\"frame\"", "1.5"});
 }
 
 TEST(PoseStream, WriterRejectsBadInput) {
@@ -223,7 +231,8 @@ TEST(PoseStream, WriterRejectsBadInput) {
 TEST(PoseStream, BopSceneGtRoundTrip) {
   const fs::path path = TestDir() / "scene_gt.json";
   const std::vector<PoseRecord> records = RandomRecords(30);
-  const Rigid3d world_from_cam(Eigen::Quaterniond(0.9, 0.1, -0.2, 0.3), Eigen::Vector3d(0.1, -0.2, 0.05));
+  const Rigid3d world_from_cam(Eigen::Quaterniond(0.9, 0.1, -0.2, 0.3),
+                               Eigen::Vector3d(0.1, -0.2, 0.05));
   ExportBopSceneGt(path.string(), records, world_from_cam.Inverse(), 7);
 
   // The file is plain BOP: model->camera in millimetres.
@@ -236,7 +245,8 @@ TEST(PoseStream, BopSceneGtRoundTrip) {
   EXPECT_NEAR(t[2].get<double>(), expected_mm.z(), 1e-9);
   EXPECT_EQ(gt["0"][0]["obj_id"].get<int>(), 7);
 
-  const std::vector<PoseRecord> back = ReadBopSceneGtAsPoses(path.string(), world_from_cam, 7, 30.0);
+  const std::vector<PoseRecord> back =
+      ReadBopSceneGtAsPoses(path.string(), world_from_cam, 7, 30.0);
   std::vector<PoseRecord> tracked;
   for (const PoseRecord& r : records) {
     if (r.status == TrackStatus::kTracking) tracked.push_back(r);
@@ -256,12 +266,14 @@ TEST(PoseStream, BopSceneGtRoundTrip) {
 
 TEST(PoseStream, BopSceneGtBadInput) {
   const fs::path dir = TestDir();
-  WriteText(dir / "nan.json",
-            R"({"0": [{"obj_id": 1, "cam_R_m2c": [1,0,0,0,1,0,0,0,1], "cam_t_m2c": [0, NaN, 1000]}]})");
+  WriteText(
+      dir / "nan.json",
+      R"({"0": [{"obj_id": 1, "cam_R_m2c": [1,0,0,0,1,0,0,0,1], "cam_t_m2c": [0, NaN, 1000]}]})");
   ExpectError([&] { ReadBopSceneGtAsPoses((dir / "nan.json").string(), Rigid3d(), 1, 30); },
               {"nan.json", "malformed JSON"});
-  WriteText(dir / "rot.json",
-            R"({"5": [{"obj_id": 1, "cam_R_m2c": [1,0,0,0,1,0,0,0,2], "cam_t_m2c": [0, 0, 1000]}]})");
+  WriteText(
+      dir / "rot.json",
+      R"({"5": [{"obj_id": 1, "cam_R_m2c": [1,0,0,0,1,0,0,0,2], "cam_t_m2c": [0, 0, 1000]}]})");
   ExpectError([&] { ReadBopSceneGtAsPoses((dir / "rot.json").string(), Rigid3d(), 1, 30); },
               {"rot.json frame 5", "cam_R_m2c", "orthonormal"});
   WriteText(dir / "short.json",

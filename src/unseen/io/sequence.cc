@@ -1,20 +1,20 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/io/sequence.h"
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
 #include <mutex>
-#include <set>
-
-#include <fmt/format.h>
-#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
+#include <set>
 
 #include "unseen/image/image_io.h"
 #include "unseen/io/bop_json.h"
@@ -39,23 +39,23 @@ constexpr double kExtrinsicsToleranceRad = 1e-6;
 // One camera as stored: its files per frame, calibration and ground truth.
 struct CameraSource {
   std::string name;
-  std::string dir;                      // BOP scene folder; empty for video/image folders
-  PinholeCamera intrinsics;             // as calibrated, with distortion
+  std::string dir;           // BOP scene folder; empty for video/image folders
+  PinholeCamera intrinsics;  // as calibrated, with distortion
   Rigid3d world_from_cam;
   std::vector<std::string> image_paths;  // per frame index
   std::vector<std::string> depth_paths;  // per frame index, or empty (no depth)
   std::vector<double> depth_scales;      // per frame index: PNG value x scale = mm
   bool has_gt = false;
   std::vector<std::optional<Rigid3d>> cam_from_obj;  // per frame index when has_gt
-  cv::Mat map_x, map_y;  // undistortion maps (empty without distortion)
+  cv::Mat map_x, map_y;                              // undistortion maps (empty without distortion)
 
   // Computes the undistortion maps when the camera has distortion. The undistorted image
   // keeps the same K (cv::initUndistortRectifyMap with newCameraMatrix = K), so pixels
   // near the border that map outside the source image become black (depth 0).
   void PrepareUndistortion() {
     if (!intrinsics.HasDistortion()) return;
-    cv::Mat k = (cv::Mat_<double>(3, 3) << intrinsics.fx, 0.0, intrinsics.cx, 0.0,
-                 intrinsics.fy, intrinsics.cy, 0.0, 0.0, 1.0);
+    cv::Mat k = (cv::Mat_<double>(3, 3) << intrinsics.fx, 0.0, intrinsics.cx, 0.0, intrinsics.fy,
+                 intrinsics.cy, 0.0, 0.0, 1.0);
     cv::initUndistortRectifyMap(k, intrinsics.distortion, cv::noArray(), k,
                                 cv::Size(intrinsics.width, intrinsics.height), CV_32FC1, map_x,
                                 map_y);
@@ -69,8 +69,8 @@ struct CameraSource {
   // Throws naming `file` when `image` does not have this camera's size.
   void CheckSize(const cv::Mat& image, const std::string& file) const {
     UNSEEN_CHECK(image.cols == intrinsics.width && image.rows == intrinsics.height,
-                 "{}: image is {}x{} but camera {} is {}x{}", file, image.cols, image.rows,
-                 name, intrinsics.width, intrinsics.height);
+                 "{}: image is {}x{} but camera {} is {}x{}", file, image.cols, image.rows, name,
+                 intrinsics.width, intrinsics.height);
   }
 };
 
@@ -131,8 +131,7 @@ PinholeCamera ParseIntrinsics(const json& entry, const std::string& what) {
                camera.fx, camera.fy);
   if (entry.contains("dist")) {
     const json& dist = entry["dist"];
-    UNSEEN_CHECK(dist.is_array(), "{}: field \"dist\" must be an array, got {}", what,
-                 dist.dump());
+    UNSEEN_CHECK(dist.is_array(), "{}: field \"dist\" must be an array, got {}", what, dist.dump());
     camera.distortion = bop::GetNumbers(entry, "dist", dist.size(), what);
   }
   return camera;
@@ -155,8 +154,8 @@ CameraSource ReadBopCamera(const std::string& name, const fs::path& dir, bool st
   std::map<int, const json*> entries;
   for (const auto& [key, entry] : cameras.items()) {
     const int id = bop::ParseFrameId(key, camera_file);
-    UNSEEN_CHECK(entry.is_object(), "{} frame {}: expected a JSON object, got {}", camera_file,
-                 key, entry.dump());
+    UNSEEN_CHECK(entry.is_object(), "{} frame {}: expected a JSON object, got {}", camera_file, key,
+                 entry.dump());
     entries[id] = &entry;
   }
 
@@ -188,12 +187,12 @@ CameraSource ReadBopCamera(const std::string& name, const fs::path& dir, bool st
       first_extrinsics = cam_from_world;
       first = false;
     } else {
-      UNSEEN_CHECK(NearlyEqual(k_values, first_k) &&
-                       NearlyEqual(k.distortion, source.intrinsics.distortion),
-                   "{}: intrinsics (cam_K/dist) differ from frame {}'s (fx={} fy={} cx={} cy={} "
-                   "vs fx={} fy={} cx={} cy={}); unseen assumes fixed intrinsics per camera",
-                   what, entries.begin()->first, k.fx, k.fy, k.cx, k.cy, first_k[0], first_k[1],
-                   first_k[2], first_k[3]);
+      UNSEEN_CHECK(
+          NearlyEqual(k_values, first_k) && NearlyEqual(k.distortion, source.intrinsics.distortion),
+          "{}: intrinsics (cam_K/dist) differ from frame {}'s (fx={} fy={} cx={} cy={} "
+          "vs fx={} fy={} cx={} cy={}); unseen assumes fixed intrinsics per camera",
+          what, entries.begin()->first, k.fx, k.fy, k.cx, k.cy, first_k[0], first_k[1], first_k[2],
+          first_k[3]);
       const PoseDifference d = Difference(cam_from_world, *first_extrinsics);
       if (d.translation > kExtrinsicsToleranceM || d.rotation_rad > kExtrinsicsToleranceRad) {
         UNSEEN_CHECK(!static_rig,
@@ -390,8 +389,7 @@ Sequence Sequence::Open(const std::string& path) {
     }
     if (seq.contains("fps")) {
       impl->fps = bop::GetNumber(seq, "fps", file);
-      UNSEEN_CHECK(impl->fps > 0.0, "{}: field \"fps\" is {}, expected positive", file,
-                   impl->fps);
+      UNSEEN_CHECK(impl->fps > 0.0, "{}: field \"fps\" is {}, expected positive", file, impl->fps);
     }
     reference_name = names.front();
     if (seq.contains("reference_camera")) {
@@ -409,8 +407,8 @@ Sequence Sequence::Open(const std::string& path) {
                    object.dump());
       if (object.contains("obj_id")) {
         declared_obj_id = bop::GetInt(object, "obj_id", file + " field \"object\"");
-        UNSEEN_CHECK(*declared_obj_id > 0, "{}: field \"object.obj_id\" is {}, expected > 0",
-                     file, *declared_obj_id);
+        UNSEEN_CHECK(*declared_obj_id > 0, "{}: field \"object.obj_id\" is {}, expected > 0", file,
+                     *declared_obj_id);
       }
       if (object.contains("model")) {
         UNSEEN_CHECK(object["model"].is_string(),
@@ -428,7 +426,8 @@ Sequence Sequence::Open(const std::string& path) {
                  "{}: not a sequence folder (neither sequence.json nor scene_camera.json found)",
                  path);
     std::string name = fs::absolute(root).lexically_normal().filename().string();
-    if (name.empty()) name = fs::absolute(root).lexically_normal().parent_path().filename().string();
+    if (name.empty())
+      name = fs::absolute(root).lexically_normal().parent_path().filename().string();
     names.push_back(name.empty() ? "cam0" : name);
     dirs.push_back(root);
     reference_name = names.front();
@@ -443,12 +442,12 @@ Sequence Sequence::Open(const std::string& path) {
     const std::string file = (dirs[i] / "scene_camera.json").string();
     const std::set<int> a(ids[0].begin(), ids[0].end()), b(ids[i].begin(), ids[i].end());
     for (int id : ids[0]) {
-      UNSEEN_CHECK(b.count(id), "{}: camera {} lacks frame {}, which camera {} has", file,
-                   names[i], id, names[0]);
+      UNSEEN_CHECK(b.count(id), "{}: camera {} lacks frame {}, which camera {} has", file, names[i],
+                   id, names[0]);
     }
     for (int id : ids[i]) {
-      UNSEEN_CHECK(a.count(id), "{}: camera {} has frame {}, which camera {} lacks", file,
-                   names[i], id, names[0]);
+      UNSEEN_CHECK(a.count(id), "{}: camera {} has frame {}, which camera {} lacks", file, names[i],
+                   id, names[0]);
     }
   }
   impl->frame_ids = ids[0];
@@ -597,8 +596,7 @@ Frame Sequence::ReadFrame(int index) const {
     const std::string& file = source.depth_paths[index];
     const cv::Mat raw = cv::imread(file, cv::IMREAD_ANYDEPTH);
     UNSEEN_CHECK(!raw.empty(), "{}: depth image missing or unreadable", file);
-    UNSEEN_CHECK(raw.type() == CV_16UC1, "{}: depth image must be 16-bit single channel",
-                 file);
+    UNSEEN_CHECK(raw.type() == CV_16UC1, "{}: depth image must be 16-bit single channel", file);
     source.CheckSize(raw, file);
     cv::Mat depth_m;
     raw.convertTo(depth_m, CV_32F, source.depth_scales[index] * 1e-3);
@@ -617,8 +615,8 @@ void Sequence::SelectCameras(const std::vector<std::string>& names) {
     }
     std::vector<std::string> all;
     for (const CameraSource& s : impl_->sources) all.push_back(s.name);
-    UNSEEN_CHECK(found >= 0, "{}: unknown camera \"{}\" (the sequence has {})", impl_->path,
-                 name, fmt::join(all, ", "));
+    UNSEEN_CHECK(found >= 0, "{}: unknown camera \"{}\" (the sequence has {})", impl_->path, name,
+                 fmt::join(all, ", "));
     UNSEEN_CHECK(std::find(selected.begin(), selected.end(), found) == selected.end(),
                  "{}: camera \"{}\" selected twice", impl_->path, name);
     selected.push_back(found);

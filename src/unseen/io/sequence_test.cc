@@ -1,11 +1,11 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/io/sequence.h"
 
-#include <filesystem>
-#include <fstream>
-
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -25,9 +25,8 @@ const std::string kSequences = std::string(UNSEEN_SOURCE_DIR) + "/../shared/data
 
 fs::path TestDir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() /
-                       (std::string("unseen_sequence_") + info->test_suite_name() + "_" +
-                        info->name());
+  const fs::path dir = fs::temp_directory_path() / (std::string("unseen_sequence_") +
+                                                    info->test_suite_name() + "_" + info->name());
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
@@ -53,8 +52,9 @@ cv::Mat TestImage(int width, int height, int frame, int camera) {
   cv::Mat image(height, width, CV_8UC3);
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
-      image.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uint8_t>(x * 4 + camera * 20),
-                                            static_cast<uint8_t>(y * 5), static_cast<uint8_t>(frame * 30));
+      image.at<cv::Vec3b>(y, x) =
+          cv::Vec3b(static_cast<uint8_t>(x * 4 + camera * 20), static_cast<uint8_t>(y * 5),
+                    static_cast<uint8_t>(frame * 30));
     }
   }
   cv::rectangle(image, cv::Rect(2 + frame, 3, 5, 5), cv::Scalar(255, 255, 255), cv::FILLED);
@@ -112,10 +112,11 @@ struct TestSequence {
 
 TEST(SequenceDevData, OpensEverySequence) {
   if (!fs::is_directory(kSequences)) GTEST_SKIP() << "no development sequences";
-  const std::map<std::string, std::pair<int, int>> expected = {
-      {"box_occluded_bar", {282, 1}},   {"cube_clutter_sidelight", {282, 1}},
-      {"cube_white_zigzag", {282, 1}},  {"rig5_cube_fig312", {240, 5}},
-      {"sphere_clutter_spin", {240, 1}}};
+  const std::map<std::string, std::pair<int, int>> expected = {{"box_occluded_bar", {282, 1}},
+                                                               {"cube_clutter_sidelight", {282, 1}},
+                                                               {"cube_white_zigzag", {282, 1}},
+                                                               {"rig5_cube_fig312", {240, 5}},
+                                                               {"sphere_clutter_spin", {240, 1}}};
   for (const auto& [name, counts] : expected) {
     SCOPED_TRACE(name);
     if (!fs::is_directory(kSequences + name)) continue;
@@ -171,8 +172,8 @@ TEST(SequenceDevData, Rig5ExtrinsicsAndGroundTruthAgree) {
   EXPECT_EQ(seq.reference_camera(), 2);
   for (int c = 0; c < 5; ++c) {
     const Rigid3d& world_from_cam = seq.rig().cameras[c].world_from_cam;
-    EXPECT_TRUE(world_from_cam.translation().isApprox(Eigen::Vector3d(-0.1 + 0.05 * c, 0, 0),
-                                                      1e-12))
+    EXPECT_TRUE(
+        world_from_cam.translation().isApprox(Eigen::Vector3d(-0.1 + 0.05 * c, 0, 0), 1e-12))
         << world_from_cam.ToString();
     EXPECT_LT(world_from_cam.rotation().angularDistance(Eigen::Quaterniond::Identity()), 1e-12);
   }
@@ -515,11 +516,13 @@ TEST(SequenceVideo, ReadsMjpegAvi) {
   wrong.width = 320;
   wrong.height = 240;
   ExpectError([&] { Sequence::OpenVideo(path.string(), wrong); }, {"clip.avi", "64x48", "320x240"});
-  ExpectError([&] { Sequence::OpenVideo((path.parent_path() / "none.avi").string(), SmallCamera()); },
-              {"none.avi", "not found"});
+  ExpectError(
+      [&] { Sequence::OpenVideo((path.parent_path() / "none.avi").string(), SmallCamera()); },
+      {"none.avi", "not found"});
   std::ofstream(path.parent_path() / "junk.avi") << "not a video";
-  ExpectError([&] { Sequence::OpenVideo((path.parent_path() / "junk.avi").string(), SmallCamera()); },
-              {"junk.avi"});
+  ExpectError(
+      [&] { Sequence::OpenVideo((path.parent_path() / "junk.avi").string(), SmallCamera()); },
+      {"junk.avi"});
 }
 
 TEST(SequenceImageFolder, ReadsSortedImages) {

@@ -1,13 +1,13 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 //
 // SequenceWriter: writes the DATASET.md layout (one BOP scene per camera + sequence.json).
+#include <fmt/format.h>
+
 #include <cmath>
 #include <filesystem>
-#include <set>
-
-#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <set>
 
 #include "unseen/io/bop_json.h"
 #include "unseen/io/sequence.h"
@@ -66,8 +66,7 @@ double Diameter(const std::vector<Eigen::Vector3f>& vertices) {
 // An 8-bit BGR copy of a CV_32FC3 [0, 1] or CV_8UC3 image.
 cv::Mat To8Bit(const cv::Mat& image, const std::string& what) {
   UNSEEN_CHECK(image.type() == CV_32FC3 || image.type() == CV_8UC3,
-               "{}: image must be CV_32FC3 [0,1] or CV_8UC3 (OpenCV type {})", what,
-               image.type());
+               "{}: image must be CV_32FC3 [0,1] or CV_8UC3 (OpenCV type {})", what, image.type());
   if (image.type() == CV_8UC3) return image;
   cv::Mat out;
   image.convertTo(out, CV_8U, 255.0);  // rounds and saturates
@@ -165,8 +164,12 @@ void SequenceWriter::WriteModel(const Mesh& mesh_in_metres) {
   json info = json::object();
   info[std::to_string(impl_->options.obj_id)] = {
       {"diameter", Diameter(mesh_in_metres.vertices) * 1e3},
-      {"min_x", min_mm.x()}, {"min_y", min_mm.y()}, {"min_z", min_mm.z()},
-      {"size_x", size_mm.x()}, {"size_y", size_mm.y()}, {"size_z", size_mm.z()}};
+      {"min_x", min_mm.x()},
+      {"min_y", min_mm.y()},
+      {"min_z", min_mm.z()},
+      {"size_x", size_mm.x()},
+      {"size_y", size_mm.y()},
+      {"size_z", size_mm.z()}};
   bop::WriteJsonFile((models / "models_info.json").string(), info);
 }
 
@@ -180,8 +183,8 @@ void SequenceWriter::WriteFrame(int frame_id, const std::vector<cv::Mat>& images
   UNSEEN_CHECK(frame_id >= 0, "{}: frame id must be non-negative", where);
   UNSEEN_CHECK(!w.frames_written.count(frame_id), "{}: frame written twice", where);
   const int n = w.rig.size();
-  UNSEEN_CHECK(static_cast<int>(images.size()) == n, "{}: {} images for a rig of {} cameras",
-               where, images.size(), n);
+  UNSEEN_CHECK(static_cast<int>(images.size()) == n, "{}: {} images for a rig of {} cameras", where,
+               images.size(), n);
   UNSEEN_CHECK(depths_m.empty() || static_cast<int>(depths_m.size()) == n,
                "{}: {} depth images for a rig of {} cameras", where, depths_m.size(), n);
   UNSEEN_CHECK(masks.empty() || static_cast<int>(masks.size()) == n,
@@ -237,9 +240,10 @@ void SequenceWriter::WriteFrame(int frame_id, const std::vector<cv::Mat>& images
           } else if (value > 65535.0) {
             out[x] = 0;  // out of range, as a sensor reports it
             if (!w.warned_depth_range) {
-              UNSEEN_LOG_WARN("{}: depth {} m exceeds the 16-bit range at depth_scale {}; "
-                              "written as 0 (no measurement)",
-                              what, in[x], depth_scale);
+              UNSEEN_LOG_WARN(
+                  "{}: depth {} m exceeds the 16-bit range at depth_scale {}; "
+                  "written as 0 (no measurement)",
+                  what, in[x], depth_scale);
               w.warned_depth_range = true;
             }
           } else {
@@ -287,8 +291,7 @@ void SequenceWriter::Finish() {
       for (int frame_id : w.frames_written) {
         const fs::path file = cam_dir / "depth" / (bop::FrameName(frame_id) + ".png");
         if (fs::exists(file)) continue;
-        UNSEEN_CHECK(cv::imwrite(file.string(), none), "{}: could not write depth",
-                     file.string());
+        UNSEEN_CHECK(cv::imwrite(file.string(), none), "{}: could not write depth", file.string());
       }
     }
     bop::WriteJsonFile((cam_dir / "scene_camera.json").string(), w.scene_camera[c]);
@@ -297,11 +300,12 @@ void SequenceWriter::Finish() {
   }
   json object = {{"obj_id", w.options.obj_id}};
   if (!w.model_file.empty()) object["model"] = w.model_file;
-  nlohmann::ordered_json sequence = {{"fps", w.options.fps},
-                   {"cameras", cameras},
-                   {"reference_camera", w.rig.cameras[w.options.reference_camera].name},
-                   {"object", object},
-                   {"frames", w.frames_written.size()}};
+  nlohmann::ordered_json sequence = {
+      {"fps", w.options.fps},
+      {"cameras", cameras},
+      {"reference_camera", w.rig.cameras[w.options.reference_camera].name},
+      {"object", object},
+      {"frames", w.frames_written.size()}};
   if (!w.options.notes.empty()) sequence["notes"] = w.options.notes;
   bop::WriteJsonFile((w.dir / "sequence.json").string(), sequence);
 }

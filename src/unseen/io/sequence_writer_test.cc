@@ -1,13 +1,13 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
-#include <filesystem>
-#include <fstream>
-#include <random>
-
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <random>
 
 #include "unseen/io/sequence.h"
 #include "unseen/util/error.h"
@@ -21,9 +21,8 @@ using ::testing::HasSubstr;
 
 fs::path TestDir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() /
-                       (std::string("unseen_sequence_writer_") + info->test_suite_name() + "_" +
-                        info->name());
+  const fs::path dir = fs::temp_directory_path() / (std::string("unseen_sequence_writer_") +
+                                                    info->test_suite_name() + "_" + info->name());
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
@@ -77,7 +76,8 @@ SyntheticFrame MakeFrame(const Rig& rig, std::mt19937* rng) {
     cv::Mat image(h, w, CV_32FC3), d(h, w, CV_32FC1), mask(h, w, CV_8UC1);
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {
-        image.at<cv::Vec3f>(y, x) = cv::Vec3f(byte(*rng) / 255.f, byte(*rng) / 255.f, byte(*rng) / 255.f);
+        image.at<cv::Vec3f>(y, x) =
+            cv::Vec3f(byte(*rng) / 255.f, byte(*rng) / 255.f, byte(*rng) / 255.f);
         d.at<float>(y, x) = (x + y) % 7 == 0 ? 0.0f : depth(*rng);
         mask.at<uint8_t>(y, x) = x > w / 2 ? 255 : 0;
       }
@@ -86,8 +86,9 @@ SyntheticFrame MakeFrame(const Rig& rig, std::mt19937* rng) {
     f.depths.push_back(d);
     f.masks.push_back(mask);
   }
-  f.world_from_obj = Rigid3d(Eigen::Quaterniond(normal(*rng), normal(*rng), normal(*rng), normal(*rng)),
-                             Eigen::Vector3d(0.1 * normal(*rng), 0.1 * normal(*rng), 1.0 + 0.1 * normal(*rng)));
+  f.world_from_obj =
+      Rigid3d(Eigen::Quaterniond(normal(*rng), normal(*rng), normal(*rng), normal(*rng)),
+              Eigen::Vector3d(0.1 * normal(*rng), 0.1 * normal(*rng), 1.0 + 0.1 * normal(*rng)));
   return f;
 }
 
@@ -111,16 +112,15 @@ TEST(SequenceWriter, RoundTrip) {
       std::vector<cv::Mat> depths = f.depths;
       if (i == 3) depths[0] = cv::Mat();
       writer.WriteFrame(i, f.images, depths,
-                        i == 2 ? std::nullopt : std::optional<Rigid3d>(f.world_from_obj),
-                        f.masks);
+                        i == 2 ? std::nullopt : std::optional<Rigid3d>(f.world_from_obj), f.masks);
     }
     writer.Finish();
   }
 
   // The DATASET.md layout.
-  for (const char* file : {"sequence.json", "cam0/rgb/000000.png", "cam1/rgb/000003.png",
-                           "cam0/depth/000000.png", "cam1/mask_visib/000002_000000.png",
-                           "cam0/scene_camera.json", "cam1/scene_gt.json"}) {
+  for (const char* file :
+       {"sequence.json", "cam0/rgb/000000.png", "cam1/rgb/000003.png", "cam0/depth/000000.png",
+        "cam1/mask_visib/000002_000000.png", "cam0/scene_camera.json", "cam1/scene_gt.json"}) {
     EXPECT_TRUE(fs::is_regular_file(dir / file)) << file;
   }
   // Frame 3 had no depth for cam0: Finish() wrote an empty (all-zero) depth image.
@@ -135,7 +135,8 @@ TEST(SequenceWriter, RoundTrip) {
   const json gt_json = ReadJson(dir / "cam1/scene_gt.json");
   EXPECT_FALSE(gt_json.contains("2"));
   const Rigid3d cam_from_obj = rig.cameras[1].cam_from_world() * frames[0].world_from_obj;
-  EXPECT_NEAR(gt_json["0"][0]["cam_t_m2c"][2].get<double>(), cam_from_obj.translation().z() * 1e3, 1e-9);
+  EXPECT_NEAR(gt_json["0"][0]["cam_t_m2c"][2].get<double>(), cam_from_obj.translation().z() * 1e3,
+              1e-9);
   const cv::Mat depth16 = cv::imread((dir / "cam0/depth/000001.png").string(), cv::IMREAD_ANYDEPTH);
   EXPECT_EQ(depth16.type(), CV_16UC1);
   EXPECT_NEAR(depth16.at<uint16_t>(0, 1), frames[1].depths[0].at<float>(0, 1) * 1e4, 0.5);
@@ -192,12 +193,14 @@ TEST(SequenceWriter, JpegImagesAndModel) {
   std::mt19937 rng(5);
   SyntheticFrame f = MakeFrame(rig, &rng);
   for (int y = 0; y < 32; ++y) {  // smooth, as JPEG expects
-    for (int x = 0; x < 48; ++x) f.images[0].at<cv::Vec3f>(y, x) = cv::Vec3f(x / 48.f, y / 32.f, 0.5f);
+    for (int x = 0; x < 48; ++x)
+      f.images[0].at<cv::Vec3f>(y, x) = cv::Vec3f(x / 48.f, y / 32.f, 0.5f);
   }
   // A 100 x 60 x 40 mm box with vertex colours.
   Mesh box;
   for (int i = 0; i < 8; ++i) {
-    box.vertices.emplace_back((i & 1 ? 0.05f : -0.05f), (i & 2 ? 0.03f : -0.03f), (i & 4 ? 0.02f : -0.02f));
+    box.vertices.emplace_back((i & 1 ? 0.05f : -0.05f), (i & 2 ? 0.03f : -0.03f),
+                              (i & 4 ? 0.02f : -0.02f));
     box.colors_bgr.emplace_back(i / 8.0f, 0.5f, 1.0f - i / 8.0f);
   }
   box.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
@@ -210,7 +213,8 @@ TEST(SequenceWriter, JpegImagesAndModel) {
   EXPECT_TRUE(fs::is_regular_file(dir / "cam0/rgb/000007.jpg"));
   EXPECT_FALSE(fs::exists(dir / "cam0/depth"));
   const json info = ReadJson(dir / "models/models_info.json");
-  EXPECT_NEAR(info["1"]["diameter"].get<double>(), std::sqrt(100.0 * 100 + 60 * 60 + 40 * 40), 1e-3);
+  EXPECT_NEAR(info["1"]["diameter"].get<double>(), std::sqrt(100.0 * 100 + 60 * 60 + 40 * 40),
+              1e-3);
   EXPECT_NEAR(info["1"]["min_x"].get<double>(), -50.0, 1e-3);
   EXPECT_NEAR(info["1"]["size_y"].get<double>(), 60.0, 1e-3);
   const json camera_json = ReadJson(dir / "cam0/scene_camera.json");
