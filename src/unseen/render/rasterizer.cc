@@ -89,41 +89,35 @@ inline void FloorDivMod(int64_t a, int64_t b, int64_t* q, int64_t* r) {
 class EdgeWalker {
  public:
   EdgeWalker(int64_t e, int64_t sx, int64_t sy) {
-    if (sx == 0) {
-      dir_ = 0;
-      q_ = e;
+    left_ = sx > 0;
+    right_ = sx < 0;
+    flat_ = sx == 0;
+    if (flat_) {
+      q_ = e;  // the edge function itself; r_ stays 0 < s_ = 1
       dq_ = sy;
       return;
     }
-    dir_ = sx > 0 ? 1 : -1;
     s_ = sx > 0 ? sx : -sx;
     FloorDivMod(e, s_, &q_, &r_);
     FloorDivMod(sy, s_, &dq_, &dr_);
   }
-  // Narrows [*lo, *hi]; false when no pixel of the row is inside.
-  bool Narrow(int64_t* lo, int64_t* hi) const {
-    if (dir_ > 0) {
-      *lo = std::max(*lo, -q_);
-    } else if (dir_ < 0) {
-      *hi = std::min(*hi, q_);
-    } else {
-      return q_ >= 0;
-    }
-    return true;
+  // Narrows [*lo, *hi]; clears *ok when no pixel of the row is inside. Branch-free: the
+  // edge's kind changes from triangle to triangle.
+  void Narrow(int64_t* lo, int64_t* hi, bool* ok) const {
+    *lo = left_ ? std::max(*lo, -q_) : *lo;
+    *hi = right_ ? std::min(*hi, q_) : *hi;
+    *ok &= !(flat_ && q_ < 0);
   }
   void NextRow() {
     q_ += dq_;
-    if (dir_ != 0) {
-      r_ += dr_;
-      if (r_ >= s_) {
-        r_ -= s_;
-        ++q_;
-      }
-    }
+    r_ += dr_;
+    const bool carry = r_ >= s_;
+    r_ -= carry ? s_ : 0;
+    q_ += carry;
   }
 
  private:
-  int dir_;
+  bool left_, right_, flat_;
   int64_t q_, r_ = 0, s_ = 1, dq_, dr_ = 0;
 };
 
@@ -183,13 +177,19 @@ void RasterTriangle(RasterVertex v0, RasterVertex v1, RasterVertex v2, bool cull
     pw1 = make_plane(double(v0.inv_z) * v0.w1, double(v1.inv_z) * v1.w1, double(v2.inv_z) * v2.w1);
     pw2 = make_plane(double(v0.inv_z) * v0.w2, double(v1.inv_z) * v1.w2, double(v2.inv_z) * v2.w2);
   }
+  // Row pointers address image column 0 of the roi-sized buffers.
+  float* const z_base = t.inv_z - t.roi.x0;
+  int32_t* const id_base = kIds ? t.ids - t.roi.x0 : nullptr;
+  float* const w_base = kAttributes ? t.weights - 2 * t.roi.x0 : nullptr;
+  const ptrdiff_t z_stride = t.z_stride, id_stride = t.id_stride, w_stride = t.w_stride;
   for (int y = y_lo; y <= y_hi; ++y, edge0.NextRow(), edge1.NextRow(), edge2.NextRow()) {
     // The span [x_lo + lo, x_lo + hi] of centres inside all three edges, exactly.
     int64_t lo = 0, hi = x_hi - x_lo;
-    if (!edge0.Narrow(&lo, &hi) || !edge1.Narrow(&lo, &hi) || !edge2.Narrow(&lo, &hi) ||
-        lo > hi) {
-      continue;
-    }
+    bool ok = true;
+    edge0.Narrow(&lo, &hi, &ok);
+    edge1.Narrow(&lo, &hi, &ok);
+    edge2.Narrow(&lo, &hi, &ok);
+    if (!ok || lo > hi) continue;
     const int x_begin = x_lo + static_cast<int>(lo), x_end = x_lo + static_cast<int>(hi);
     const float dy = static_cast<float>(y) - y_ref;
     const float z_row = pz.f0 + pz.gy * dy;
@@ -198,9 +198,10 @@ void RasterTriangle(RasterVertex v0, RasterVertex v1, RasterVertex v2, bool cull
       w1_row = pw1.f0 + pw1.gy * dy;
       w2_row = pw2.f0 + pw2.gy * dy;
     }
-    float* z_ptr = t.inv_z + (y - t.roi.y0) * t.z_stride - t.roi.x0;
-    int32_t* id_ptr = kIds ? t.ids + (y - t.roi.y0) * t.id_stride - t.roi.x0 : nullptr;
-    float* w_ptr = kAttributes ? t.weights + (y - t.roi.y0) * t.w_stride - 2 * t.roi.x0 : nullptr;
+    const ptrdiff_t row = y - t.roi.y0;
+    float* z_ptr = z_base + row * z_stride;
+    int32_t* id_ptr = kIds ? id_base + row * id_stride : nullptr;
+    float* w_ptr = kAttributes ? w_base + row * w_stride : nullptr;
     float dx = static_cast<float>(x_begin) - x_ref;  // exact, and so are its increments
     for (int x = x_begin; x <= x_end; ++x, dx += 1.0f) {
       const float inv_z = z_row + pz.gx * dx;
@@ -369,17 +370,20 @@ void CheckMeshForRender(const Mesh& mesh) {
 struct TextureView {
   const float* data = nullptr;
   int width = 0, height = 0;
+  float width_f = 0.0f, height_f = 0.0f;
   size_t step = 0;  // floats per row
   explicit TextureView(const cv::Mat& m = cv::Mat()) {
     if (m.empty()) return;
     data = m.ptr<float>();
     width = m.cols;
     height = m.rows;
+    width_f = static_cast<float>(width);
+    height_f = static_cast<float>(height);
     step = m.step1();
   }
 };
 
-inline void Lerp4(const float* p00, const float* p01, const float* p10, const float* p11,
+[[gnu::always_inline]] inline void Lerp4(const float* p00, const float* p01, const float* p10, const float* p11,
                   float ax, float ay, float* __restrict out, bool may_read_one_more) {
 #if defined(__SSE2__)
   if (may_read_one_more) {  // four-float loads read one float past the texel
@@ -410,8 +414,9 @@ inline int Wrap(int x, int n) {
 }
 
 // Bilinear sample at OBJ texture coordinates (v up), repeating.
-inline void SampleWrap(const TextureView& t, float u, float v, float* __restrict bgr) {
-  float fx = u * t.width - 0.5f, fy = (1.0f - v) * t.height - 0.5f;
+[[gnu::always_inline]] inline void SampleWrap(const TextureView& t, float u, float v,
+                                              float* __restrict bgr) {
+  float fx = u * t.width_f - 0.5f, fy = (1.0f - v) * t.height_f - 0.5f;
   if (!(std::abs(fx) < 1e8f)) fx = 0.0f;  // NaN or absurd uv
   if (!(std::abs(fy) < 1e8f)) fy = 0.0f;
   const float flx = std::floor(fx), fly = std::floor(fy);
@@ -581,6 +586,21 @@ class Shader {
   Eigen::Vector3f n0_, dn1_, dn2_;
 };
 
+// z[i] = z[i] > 0 ? 1 / z[i] : 0.
+void InvertPositive(float* z, int n) {
+  int i = 0;
+#if defined(__SSE2__)
+  const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+  for (; i + 4 <= n; i += 4) {
+    const __m128 v = _mm_loadu_ps(z + i);
+    const __m128 positive = _mm_cmpgt_ps(v, zero);
+    const __m128 safe = _mm_or_ps(_mm_and_ps(positive, v), _mm_andnot_ps(positive, one));
+    _mm_storeu_ps(z + i, _mm_and_ps(positive, _mm_div_ps(one, safe)));
+  }
+#endif
+  for (; i < n; ++i) z[i] = z[i] > 0.0f ? 1.0f / z[i] : 0.0f;
+}
+
 void ReleaseOutputs(RenderBuffers* out) {
   out->color.release();
   out->depth.release();
@@ -734,14 +754,14 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
   } else {
     out->normal.release();
   }
+  cv::compare(out->depth, 0.0f, out->mask, cv::CMP_GT);  // 255 where covered
+  for (int y = 0; y < size.height; ++y) InvertPositive(out->depth.ptr<float>(y), size.width);
   Shader shader(mesh);
   const Eigen::Matrix3f rotation = cam_from_obj.RotationMatrix().cast<float>();
   const int width = size.width;
   for (int y = 0; y < size.height; ++y) {
     float* z = out->depth.ptr<float>(y);
     uint8_t* m = out->mask.ptr<uint8_t>(y);
-    for (int x = 0; x < width; ++x) m[x] = z[x] > 0.0f ? 255 : 0;
-    for (int x = 0; x < width; ++x) z[x] = z[x] > 0.0f ? 1.0f / z[x] : 0.0f;
     if (options.write_triangle_ids) {
       int32_t* id = ids.ptr<int32_t>(y);
       for (int x = 0; x < width; ++x) id[x] = m[x] ? id[x] : -1;
