@@ -447,7 +447,9 @@ SynthSummary Synthesize(const Scene& scene_in, const std::string& out_dir,
   w.reference_camera = scene.reference_camera;
   w.notes = fmt::format("{}: {} [rendered by unseen synth from {}, seed {}]", scene.name,
                         scene.notes, scene.path, scene.seed);
-  std::filesystem::create_directories(out_dir);
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  UNSEEN_CHECK(!ec, "output folder {} cannot be created: {}", out_dir, ec.message());
   SequenceWriter writer(out_dir, scene.rig, w);
   Mesh model = synth.object_mesh();
   if (scene.model_scale != 1.0) model.Scale(static_cast<float>(scene.model_scale));
