@@ -6,9 +6,10 @@
 // pose_stream.cc; not part of the public io interface.
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "unseen/geometry/rigid3.h"
 

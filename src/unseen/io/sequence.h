@@ -6,10 +6,11 @@
 #pragma once
 
 #include <memory>
-#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include <opencv2/core.hpp>
 
 #include "unseen/camera/camera.h"
 #include "unseen/geometry/rigid3.h"

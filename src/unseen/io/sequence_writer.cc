@@ -1,13 +1,14 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 //
 // SequenceWriter: writes the DATASET.md layout (one BOP scene per camera + sequence.json).
-#include <fmt/format.h>
 
 #include <cmath>
 #include <filesystem>
+#include <set>
+
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <set>
 
 #include "unseen/io/bop_json.h"
 #include "unseen/io/sequence.h"
