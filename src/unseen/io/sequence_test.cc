@@ -162,6 +162,12 @@ TEST(SequenceDevData, CubeStartsOneMetreAway) {
   EXPECT_TRUE(gt->translation().isApprox(Eigen::Vector3d(0, 0, 1.0), 1e-9));
   EXPECT_EQ(seq.rig().cameras[0].name, "cam0");
   EXPECT_TRUE(seq.rig().cameras[0].world_from_cam.translation().isZero());
+  // The 96 mm cube model, loaded in metres.
+  const Mesh model = seq.LoadModel();
+  Eigen::Vector3f min, max;
+  model.BoundingBox(&min, &max);
+  EXPECT_TRUE((max - min).isApprox(Eigen::Vector3f::Constant(0.096f), 1e-4f));
+  EXPECT_GT(model.num_triangles(), 0);
 }
 
 TEST(SequenceDevData, Rig5ExtrinsicsAndGroundTruthAgree) {
