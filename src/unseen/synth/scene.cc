@@ -515,12 +515,12 @@ LightingSpec ParseLights(const Field& f) {
     const Field type_field = s.Child("type");
     const std::string type = type_field.String();
     if (type == "directional") {
-      s.ExpectKeys({"type", "direction", "intensity", "color_rgb"});
+      s.ExpectKeys({"type", "direction", "intensity", "color_rgb", "cast_shadows"});
       light.type = LightSpec::Type::kDirectional;
       light.direction = Direction(s.Child("direction"));
     } else if (type == "point") {
       s.ExpectKeys({"type", "position_mm", "velocity_mm_s", "intensity", "reference_distance_mm",
-                    "color_rgb"});
+                    "color_rgb", "cast_shadows"});
       light.type = LightSpec::Type::kPoint;
       light.position_m = Vec3Mm(s.Child("position_mm"));
       if (s.Has("velocity_mm_s")) light.velocity_m_s = Vec3Mm(s.Child("velocity_mm_s"));
@@ -533,6 +533,7 @@ LightingSpec ParseLights(const Field& f) {
     }
     if (s.Has("intensity")) light.intensity = s.Child("intensity").NonNegative(s.Child("intensity").Double());
     if (s.Has("color_rgb")) light.color_bgr = ColorRgb(s.Child("color_rgb"));
+    if (s.Has("cast_shadows")) light.cast_shadows = s.Child("cast_shadows").Bool();
     l.lights.push_back(light);
   }
   return l;

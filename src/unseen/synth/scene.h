@@ -74,6 +74,7 @@ struct LightSpec {
   double intensity = 0.7;
   double reference_distance_m = 1.0;
   Eigen::Vector3d color_bgr = Eigen::Vector3d::Ones();
+  bool cast_shadows = false;  // the object shadows itself from this light (shadow map)
   // Position of a point light at time t (seconds).
   Eigen::Vector3d PositionAt(double t_s) const { return position_m + t_s * velocity_m_s; }
 };

@@ -112,7 +112,7 @@ background: {type: clutter, distance_mm: 1500, brightness: 0.8}
 lights:
   ambient: 0.2
   sources:
-    - {type: directional, direction: [1, 0.15, 0.35], intensity: 0.9}
+    - {type: directional, direction: [1, 0.15, 0.35], intensity: 0.9, cast_shadows: true}
     - {type: point, position_mm: [500, -600, 300], velocity_mm_s: [-10, 0, 0], intensity: 0.5,
        reference_distance_mm: 1000, color_rgb: [1, 0.9, 0.8]}
 occluders:
@@ -140,6 +140,8 @@ model_scale: 1.1
   ASSERT_EQ(s.lighting.lights.size(), 2u);
   EXPECT_EQ(s.lighting.lights[0].type, LightSpec::Type::kDirectional);
   EXPECT_NEAR(s.lighting.lights[0].direction.norm(), 1.0, 1e-12);
+  EXPECT_TRUE(s.lighting.lights[0].cast_shadows);
+  EXPECT_FALSE(s.lighting.lights[1].cast_shadows);
   EXPECT_TRUE(s.lighting.lights[1].PositionAt(2.0).isApprox(Eigen::Vector3d(0.48, -0.6, 0.3)));
   // color_rgb [1, 0.9, 0.8] is stored as BGR.
   EXPECT_TRUE(s.lighting.lights[1].color_bgr.isApprox(Eigen::Vector3d(0.8, 0.9, 1.0)));

@@ -13,6 +13,7 @@
 #include "unseen/mesh/primitives.h"
 #include "unseen/image/image_io.h"
 #include "unseen/render/rasterizer.h"
+#include "unseen/render/shading.h"
 #include "unseen/synth/clutter.h"
 #include "unseen/util/error.h"
 #include "unseen/util/logging.h"
@@ -127,72 +128,29 @@ Mesh MakeBackgroundMesh(const Rig& rig, const BackgroundSpec& spec, const cv::Ma
   return m;
 }
 
-// Lights in the frame of one camera at one time.
-struct CameraLights {
-  double ambient = 0.0;
-  struct Source {
-    bool point = false;
-    Eigen::Vector3f towards_light;  // directional: unit vector from the surface to the light
-    Eigen::Vector3f position;       // point: position in the camera frame
-    float intensity = 0.0f;
-    float ref_dist_sq = 1.0f;
-    Eigen::Vector3f color;          // BGR
-  };
-  std::vector<Source> sources;
-};
-
-CameraLights LightsInCamera(const LightingSpec& lighting, const Rigid3d& cam_from_world,
-                            double t_s) {
-  CameraLights out;
-  out.ambient = lighting.ambient;
-  for (const LightSpec& l : lighting.lights) {
-    CameraLights::Source s;
-    s.point = l.type == LightSpec::Type::kPoint;
-    s.intensity = static_cast<float>(l.intensity);
-    s.color = l.color_bgr.cast<float>();
-    if (s.point) {
-      s.position = (cam_from_world * l.PositionAt(t_s)).cast<float>();
-      s.ref_dist_sq = static_cast<float>(l.reference_distance_m * l.reference_distance_m);
+// The scene's lights in the frame of one camera at time t (render/shading.h wants them
+// there). A point light's intensity is given at its reference distance; shading.h's at 1 m.
+Lighting LightsInCamera(const LightingSpec& spec, const Rigid3d& cam_from_world, double t_s) {
+  Lighting out;
+  out.ambient_bgr = Eigen::Vector3f::Constant(static_cast<float>(spec.ambient));
+  for (const LightSpec& l : spec.lights) {
+    if (l.type == LightSpec::Type::kPoint) {
+      PointLight p;
+      p.position_in_cam = cam_from_world * l.PositionAt(t_s);
+      p.color_bgr = l.color_bgr.cast<float>();
+      p.intensity = l.intensity * l.reference_distance_m * l.reference_distance_m;
+      p.cast_shadows = l.cast_shadows;
+      out.point.push_back(p);
     } else {
-      s.towards_light = (cam_from_world.rotation() * (-l.direction)).normalized().cast<float>();
+      DirectionalLight d;
+      d.direction_in_cam = cam_from_world.rotation() * l.direction;
+      d.color_bgr = l.color_bgr.cast<float>();
+      d.intensity = l.intensity;
+      d.cast_shadows = l.cast_shadows;
+      out.directional.push_back(d);
     }
-    out.sources.push_back(s);
   }
   return out;
-}
-
-// Lambertian shading in place: colour *= ambient + sum_l intensity_l max(0, n . l) (with
-// inverse-square fall-off for point lights), per pixel of the render's ROI.
-void Shade(const PinholeCamera& camera, const CameraLights& lights, RenderBuffers* b) {
-  if (b->roi.empty()) return;
-  const Eigen::Vector3f ambient = Eigen::Vector3f::Constant(static_cast<float>(lights.ambient));
-  for (int y = 0; y < b->mask.rows; ++y) {
-    const uint8_t* m = b->mask.ptr<uint8_t>(y);
-    const float* z = b->depth.ptr<float>(y);
-    const cv::Vec3f* n = b->normal.ptr<cv::Vec3f>(y);
-    cv::Vec3f* c = b->color.ptr<cv::Vec3f>(y);
-    for (int x = 0; x < b->mask.cols; ++x) {
-      if (!m[x]) continue;
-      Eigen::Vector3f normal(n[x][0], n[x][1], n[x][2]);
-      const Eigen::Vector3f p =
-          camera.Unproject(Eigen::Vector2d(x + b->roi.x0, y + b->roi.y0), z[x]).cast<float>();
-      // Light the side facing the camera (a back-facing normal seen through is flipped).
-      if (normal.dot(p) > 0.0f) normal = -normal;
-      Eigen::Vector3f irradiance = ambient;
-      for (const auto& s : lights.sources) {
-        if (s.point) {
-          const Eigen::Vector3f d = s.position - p;
-          const float dist_sq = std::max(d.squaredNorm(), 1e-8f);
-          const float cos_i = normal.dot(d) / std::sqrt(dist_sq);
-          if (cos_i > 0.0f) irradiance += s.color * (s.intensity * cos_i * s.ref_dist_sq / dist_sq);
-        } else {
-          const float cos_i = normal.dot(s.towards_light);
-          if (cos_i > 0.0f) irradiance += s.color * (s.intensity * cos_i);
-        }
-      }
-      for (int k = 0; k < 3; ++k) c[x][k] *= irradiance[k];
-    }
-  }
 }
 
 // The object-space bounding sphere of `mesh`.
@@ -324,7 +282,8 @@ void Synthesizer::RenderCamera(int camera, int frame_id, SynthFrame* out) const 
   const PinholeCamera ss = Supersampled(rig_cam.intrinsics, factor);
   const Rigid3d cam_from_world = rig_cam.cam_from_world();
   const double t = out->time_s;
-  const CameraLights lights = LightsInCamera(scene_.lighting, cam_from_world, t);
+  const Lighting lighting = LightsInCamera(scene_.lighting, cam_from_world, t);
+  const ShadingOptions shading;
 
   cv::Mat color(ss.height, ss.width, CV_32FC3, cv::Scalar::all(0.0));
   cv::Mat depth(ss.height, ss.width, CV_32FC1, cv::Scalar(0.0));
@@ -334,7 +293,6 @@ void Synthesizer::RenderCamera(int camera, int frame_id, SynthFrame* out) const 
   flat.cull_back_faces = false;
   RenderOptions shaded = flat;
   shaded.cull_back_faces = true;
-  shaded.write_normals = true;
   RenderBuffers buffers;
 
   // Background: unlit (a photo or a wall as it appears).
@@ -346,9 +304,12 @@ void Synthesizer::RenderCamera(int camera, int frame_id, SynthFrame* out) const 
     const Sphere sphere = BoundingSphereOf(mesh);
     const auto rect = ss.SphereRect(cam_from_obj * sphere.centre, sphere.radius);
     if (!rect) return;
-    Render(mesh, ss, cam_from_obj, rect->Grow(2).Intersect(ss.ImageRect()), lit ? shaded : flat,
-           &buffers);
-    if (lit) Shade(ss, lights, &buffers);
+    const PixelRect roi = rect->Grow(2).Intersect(ss.ImageRect());
+    if (lit) {
+      RenderShaded(mesh, ss, cam_from_obj, roi, lighting, shaded, shading, &buffers);
+    } else {
+      Render(mesh, ss, cam_from_obj, roi, flat, &buffers);
+    }
     Composite(buffers, id, &color, &depth, &ids);
   };
 
