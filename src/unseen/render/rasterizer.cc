@@ -12,6 +12,7 @@
 #include <immintrin.h>
 #endif
 
+#include "unseen/render/mipmap.h"
 #include "unseen/util/error.h"
 
 namespace unseen {
@@ -27,6 +28,7 @@ constexpr int kSubpixelBits = 8;
 constexpr int64_t kSubpixel = 1 << kSubpixelBits;  // screen positions snap to 1/256 px
 constexpr double kGuardPx = 4096.0;  // triangles are clipped to the image grown by this
 constexpr int kMaxImageSide = 32768;  // keeps snapped coordinates in int32
+constexpr int kMaxMipmapLevels = 12;
 
 // A mesh vertex after projection (one per vertex, shared by its triangles).
 struct ProjectedVertex {
@@ -298,12 +300,20 @@ void RasterClipped(const Mesh& mesh, const Eigen::Vector3i& tri, int32_t id, boo
   }
 }
 
+// Per material, the texture area (texels) and image area (pixels) of the drawn
+// triangles, to choose a mip-map level.
+struct TexelStats {
+  std::vector<double> texture_size;  // texels of each material's texture (0: none)
+  std::vector<double> texels, pixels;
+};
+
 // Scan-converts every triangle. The interpolated attributes are the texture coordinates
 // `uvs` (per vertex) or, when null, the barycentric coordinates in the mesh triangle.
+// `stats`, when not null, is accumulated over the triangles not clipped.
 template <bool kAttributes, bool kIds>
 void RasterMesh(const Mesh& mesh, const Eigen::Vector2f* uvs,
                 const std::vector<ProjectedVertex>& projected, bool cull, const ClipContext& clip,
-                const RasterTarget& target) {
+                const RasterTarget& target, TexelStats* stats) {
   const Eigen::Vector2f corners[3] = {{0.0f, 0.0f}, {1.0f, 0.0f}, {0.0f, 1.0f}};
   const uint32_t nv = static_cast<uint32_t>(mesh.vertices.size());
   const int nt = mesh.num_triangles();
@@ -324,6 +334,18 @@ void RasterMesh(const Mesh& mesh, const Eigen::Vector2f* uvs,
       w[2] = uvs[tri[2]];
     }
     if (p0.ok & p1.ok & p2.ok) {
+      if (stats != nullptr) {
+        const int m = mesh.triangle_materials.empty() ? 0 : mesh.triangle_materials[t];
+        const int64_t area2 = int64_t(p1.x - p0.x) * (p2.y - p0.y) -
+                              int64_t(p2.x - p0.x) * (p1.y - p0.y);
+        if (stats->texture_size[m] > 0.0 && area2 != 0 && !(cull && area2 > 0)) {
+          const Eigen::Vector2f& u0 = mesh.uvs[tri[0]];
+          const Eigen::Vector2f d1 = mesh.uvs[tri[1]] - u0, d2 = mesh.uvs[tri[2]] - u0;
+          stats->texels[m] += std::abs(double(d1.x()) * d2.y() - double(d1.y()) * d2.x()) *
+                              stats->texture_size[m];
+          stats->pixels[m] += std::abs(double(area2)) / double(kSubpixel * kSubpixel);
+        }
+      }
       RasterTriangle<kAttributes, kIds>({p0.x, p0.y, p0.inv_z, w[0].x(), w[0].y()},
                                         {p1.x, p1.y, p1.inv_z, w[1].x(), w[1].y()},
                                         {p2.x, p2.y, p2.inv_z, w[2].x(), w[2].y()}, cull, t,
@@ -456,9 +478,10 @@ struct ProjectorView {
 // a mesh triangle. Per-triangle data is prepared once per run of pixels of a triangle.
 class Shader {
  public:
-  explicit Shader(const Mesh& mesh) : mesh_(mesh) {
-    textures_.reserve(mesh.materials.size());
-    for (const Material& m : mesh.materials) textures_.emplace_back(m.texture);
+  // `textures`: the image (mip-map level) to sample for each material.
+  Shader(const Mesh& mesh, const std::vector<cv::Mat>& textures) : mesh_(mesh) {
+    textures_.reserve(textures.size());
+    for (const cv::Mat& t : textures) textures_.emplace_back(t);
     for (const Projector& p : mesh.projectors) {
       ProjectorView v;
       v.rotation = p.cam_from_obj.RotationMatrix().cast<float>();
@@ -733,14 +756,34 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
   // 3. Scan conversion.
   const bool cull = options.cull_back_faces;
   const Eigen::Vector2f* uvs = uv_mode ? mesh.uvs.data() : nullptr;
+  TexelStats stats;
+  const bool mipmaps = options.write_color && options.mipmaps && mesh.HasUvTexture();
+  if (mipmaps) {
+    for (const Material& m : mesh.materials) stats.texture_size.push_back(double(m.texture.total()));
+    stats.texels.assign(mesh.materials.size(), 0.0);
+    stats.pixels.assign(mesh.materials.size(), 0.0);
+  }
+  TexelStats* stats_ptr = mipmaps ? &stats : nullptr;
   if (need_weights && need_ids) {
-    RasterMesh<true, true>(mesh, uvs, projected, cull, clip, target);
+    RasterMesh<true, true>(mesh, uvs, projected, cull, clip, target, stats_ptr);
   } else if (need_weights) {
-    RasterMesh<true, false>(mesh, uvs, projected, cull, clip, target);
+    RasterMesh<true, false>(mesh, uvs, projected, cull, clip, target, stats_ptr);
   } else if (need_ids) {
-    RasterMesh<false, true>(mesh, uvs, projected, cull, clip, target);
+    RasterMesh<false, true>(mesh, uvs, projected, cull, clip, target, stats_ptr);
   } else {
-    RasterMesh<false, false>(mesh, uvs, projected, cull, clip, target);
+    RasterMesh<false, false>(mesh, uvs, projected, cull, clip, target, stats_ptr);
+  }
+  // The texture (level) of each material: one mip-map level per material and render,
+  // from the mean number of texels per pixel of its drawn triangles.
+  std::vector<cv::Mat> textures;
+  for (size_t m = 0; m < mesh.materials.size(); ++m) {
+    const cv::Mat& texture = mesh.materials[m].texture;
+    textures.push_back(texture);
+    if (!mipmaps || texture.empty() || !(stats.pixels[m] > 0.0)) continue;
+    const double texels_per_pixel = stats.texels[m] / stats.pixels[m];
+    if (MipmapLevelFor(texels_per_pixel, kMaxMipmapLevels) == 0) continue;
+    const std::vector<cv::Mat> levels = MipmapLevels(texture);
+    textures.back() = levels[MipmapLevelFor(texels_per_pixel, int(levels.size()))];
   }
 
   // 4. Resolve: metric depth, mask, ids, and colour/normals of the visible surface.
@@ -756,7 +799,7 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
   }
   cv::compare(out->depth, 0.0f, out->mask, cv::CMP_GT);  // 255 where covered
   for (int y = 0; y < size.height; ++y) InvertPositive(out->depth.ptr<float>(y), size.width);
-  Shader shader(mesh);
+  Shader shader(mesh, textures);
   const Eigen::Matrix3f rotation = cam_from_obj.RotationMatrix().cast<float>();
   const int width = size.width;
   for (int y = 0; y < size.height; ++y) {

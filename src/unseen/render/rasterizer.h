@@ -26,8 +26,9 @@
 //     projector is not modelled. A point no projector sees falls through to 2-4.
 //  2. UV texture of the triangle's material (triangles without `triangle_materials` use
 //     material 0): uv OBJ style (v up, (0, 0) the bottom-left corner of the image),
-//     bilinear, *wrapping* (repeat) outside [0, 1) and across the border. Not modulated by
-//     the diffuse colour.
+//     bilinear, *wrapping* (repeat) outside [0, 1) and across the border, from a mip-map
+//     level when the texture is minified (RenderOptions::mipmaps). Not modulated by the
+//     diffuse colour.
 //  3. per-vertex colours, interpolated perspective-correctly.
 //  4. the material's diffuse colour; white when the mesh has no material.
 #pragma once
@@ -45,6 +46,9 @@ struct RenderOptions {
   bool write_color = true;         // false: depth and mask only (faster)
   bool write_triangle_ids = false; // fill RenderBuffers::triangle_id
   bool write_normals = false;      // fill RenderBuffers::normal (for shading; not the tracker)
+  // Sample minified UV textures from a mip-map level (render/mipmap.h): one level per
+  // material and render, floor(log2(texels per pixel) / 2) over its drawn triangles.
+  bool mipmaps = true;
   double near_m = 1e-3;            // near clipping distance, metres (> 0)
   void Check() const;
 };

@@ -287,10 +287,40 @@ TEST(Rasterizer, TextureCoordinatesAgreeBetweenInterpolationPaths) {
       Render(sphere, cam, pose, cam.ImageRect(), barycentric_path, &b);
       EXPECT_EQ(cv::norm(a.mask, b.mask, cv::NORM_INF), 0.0);
       // (Near and culled: the whole visible front is nearer than near_m.)
-      if (!cull || pose.translation().z() > 0.5) EXPECT_GT(cv::countNonZero(a.mask), 1000);
+      if (!cull || pose.translation().z() > 0.5) {
+        EXPECT_GT(cv::countNonZero(a.mask), 1000);
+      }
       EXPECT_LT(cv::norm(a.color, b.color, cv::NORM_INF), 1e-3);
     }
   }
+}
+
+TEST(Rasterizer, MinifiedTexturesAreSampledFromAMipmapLevel) {
+  const PinholeCamera cam = TestCamera();
+  // A 1-texel checkerboard of 256 x 256 texels on a 60 x 60 px quad: 18 texels per
+  // pixel, level 2, where every texel is the mean 0.5. Without mip-maps it aliases.
+  Mesh quad = MakeScreenQuad(cam, 19.5, 9.5, 79.5, 69.5, 1.0);
+  quad.uvs = {{0, 1}, {0, 0}, {1, 0}, {1, 1}};
+  Material material;
+  material.texture.create(256, 256, CV_32FC3);
+  for (int y = 0; y < 256; ++y) {
+    for (int x = 0; x < 256; ++x) {
+      material.texture.at<cv::Vec3f>(y, x) = cv::Vec3f::all((x + y) % 2 ? 1.0f : 0.0f);
+    }
+  }
+  quad.materials = {material};
+  RenderOptions options;
+  RenderBuffers out;
+  Render(quad, cam, Rigid3d(), cam.ImageRect(), options, &out);
+  const cv::Mat inside = out.color(cv::Rect(20, 10, 60, 60));
+  double lo, hi;
+  cv::minMaxLoc(inside.reshape(1), &lo, &hi);
+  EXPECT_NEAR(lo, 0.5, 1e-5);
+  EXPECT_NEAR(hi, 0.5, 1e-5);
+  options.mipmaps = false;
+  Render(quad, cam, Rigid3d(), cam.ImageRect(), options, &out);
+  cv::minMaxLoc(out.color(cv::Rect(20, 10, 60, 60)).reshape(1), &lo, &hi);
+  EXPECT_GT(hi - lo, 0.5);
 }
 
 // Fan and jittered grid covering [x0, x1] x [y0, y1]: every pixel centre strictly inside
