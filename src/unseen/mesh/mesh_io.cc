@@ -426,7 +426,6 @@ void WriteLittleEndian(std::ostream& out, T value) {
 
 void SavePly(const Mesh& mesh, const fs::path& path, float scale) {
   const std::string file = path.string();
-  const bool textured = mesh.HasUvTexture();
   const int num_materials = static_cast<int>(mesh.materials.size());
   std::vector<bool> used(num_materials, false);
   for (int t = 0; t < mesh.num_triangles(); ++t) {
@@ -438,10 +437,12 @@ void SavePly(const Mesh& mesh, const fs::path& path, float scale) {
     num_used += used[m];
     num_used_textured += used[m] && !mesh.materials[m].texture.empty();
   }
+  // Textures of materials no triangle uses are not saved.
+  const bool textured = !mesh.uvs.empty() && num_used_textured > 0;
   // A single textured material keeps its texture and uvs as they are (repeat allowed);
   // otherwise the materials are packed into an atlas and the uvs remapped.
-  const bool single_texture = textured && num_used == 1 && num_used_textured == 1;
-  const bool atlas_needed = textured && num_used_textured >= 1 && !single_texture;
+  const bool single_texture = textured && num_used == 1;
+  const bool atlas_needed = textured && !single_texture;
   // Without texture or vertex colours, distinct material colours become vertex colours.
   bool bake_diffuse = false;
   if (!textured && mesh.colors_bgr.empty()) {

@@ -696,6 +696,15 @@ TEST_F(MeshIoTest, MaterialColoursBecomeVertexColoursInPly) {
   ExpectSameAppearance(mesh, LoadMesh(Path("m.ply")), 0.01f);
   SaveMesh(mesh, Path("m.obj"));
   ExpectSameAppearance(mesh, LoadMesh(Path("m.obj")), 0.01f);
+  // A textured material that no triangle uses does not make the PLY textured.
+  mesh.materials.push_back(Material());
+  mesh.materials[2].texture = cv::Mat(4, 4, CV_32FC3, cv::Scalar(0.5, 0.5, 0.5));
+  mesh.uvs.assign(4, Eigen::Vector2f(0.5f, 0.5f));
+  SaveMesh(mesh, Path("unused.ply"));
+  const Mesh loaded = LoadMesh(Path("unused.ply"));
+  EXPECT_FALSE(loaded.HasUvTexture());
+  EXPECT_FALSE(fs::exists(Path("unused.png")));
+  ExpectSameAppearance(mesh, loaded, 0.01f);
 }
 
 TEST_F(MeshIoTest, ProjectorsRoundTrip) {
