@@ -538,12 +538,15 @@ TEST_F(MeshIoTest, GltfEmbeddedTextureAndNodeTransform) {
       LoadMesh(Write("quad.gltf", QuadGltf("data:image/png;base64," + Base64(png))));
   ExpectQuadTopRed(mesh, 5.0f);
   EXPECT_EQ(mesh.materials[0].name, "painted");
+  EXPECT_EQ(mesh.materials[0].texture_path, "");  // embedded: no file of its own
 }
 
 TEST_F(MeshIoTest, GltfExternalTexture) {
   cv::imwrite(Path("quad texture.png"), TopRedBottomBlue());
   const Mesh mesh = LoadMesh(Write("quad.gltf", QuadGltf("quad%20texture.png")));
   ExpectQuadTopRed(mesh, 5.0f);
+  fs::remove(Path("quad texture.png"));
+  ExpectThrowsMentioning([&] { LoadMesh(Path("quad.gltf")); }, {"quad.gltf", "quad%20texture.png"});
 }
 
 // A triangle with per-vertex colours (COLOR_0) and a material with a base colour factor.
