@@ -1,13 +1,13 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/eval/evaluation.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
 #include <set>
-
-#include <fmt/format.h>
 
 #include "unseen/util/error.h"
 
@@ -64,8 +64,7 @@ void EvaluationOptions::Check() const {
 }
 
 EvaluationResult Evaluate(const std::vector<GroundTruthFrame>& ground_truth,
-                          const std::vector<PoseRecord>& poses,
-                          const EvaluationOptions& options) {
+                          const std::vector<PoseRecord>& poses, const EvaluationOptions& options) {
   options.Check();
   EvaluationResult result;
   result.options = options;
@@ -188,7 +187,9 @@ std::string EvaluationResult::Table() const {
   s += fmt::format("  tracked (scored)        {:>8}\n", scored_frames);
   s += fmt::format("  lost / searching        {:>8}\n", lost_frames);
   s += fmt::format("  missing from stream     {:>8}\n", missing_frames);
-  if (extra_records > 0) s += fmt::format("records without ground truth {:>5} (ignored)\n", extra_records);
+  if (extra_records > 0) {
+    s += fmt::format("records without ground truth {:>5} (ignored)\n", extra_records);
+  }
   s += fmt::format("success {:g} cm / {:g} deg     {:>7.2f} %\n", options.success_trans_m * 100.0,
                    options.success_rot_deg, success_rate * 100.0);
   s += fmt::format("success {:g} cm / {:g} deg     {:>7.2f} %\n", options.strict_trans_m * 100.0,
@@ -235,9 +236,10 @@ nlohmann::json EvaluationResult::ToJson() const {
   j["extra_records"] = extra_records;
   j["success_5cm5deg"] = success_rate;
   j["success_2cm2deg"] = strict_success_rate;
-  j["success_thresholds"] = {
-      {"trans_m", options.success_trans_m}, {"rot_deg", options.success_rot_deg},
-      {"strict_trans_m", options.strict_trans_m}, {"strict_rot_deg", options.strict_rot_deg}};
+  j["success_thresholds"] = {{"trans_m", options.success_trans_m},
+                             {"rot_deg", options.success_rot_deg},
+                             {"strict_trans_m", options.strict_trans_m},
+                             {"strict_rot_deg", options.strict_rot_deg}};
   j["mean_trans_err_mm"] = ValueOrNull(trans_err_mm.mean, valid);
   j["rms_trans_err_mm"] = ValueOrNull(trans_err_mm.rms, valid);
   j["max_trans_err_mm"] = ValueOrNull(trans_err_mm.max, valid);

@@ -25,12 +25,11 @@
 //    carries timing (or their sum is 0).
 #pragma once
 
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <nlohmann/json.hpp>
 
 #include "unseen/geometry/rigid3.h"
 #include "unseen/io/pose_stream.h"
@@ -42,10 +41,10 @@ struct EvaluationOptions {
   // scored frame (for unknown objects whose frame the system chose):
   // obj_gt_from_obj_est = gt0^-1 * est0, then every estimate becomes est * offset^-1.
   bool align_first = false;
-  double success_trans_m = 0.05;     // RBOT threshold on the 3-D distance, metres (> 0)
-  double success_rot_deg = 5.0;      // RBOT threshold on the angle, degrees (> 0)
-  double strict_trans_m = 0.02;      // strict threshold on the 3-D distance, metres (> 0)
-  double strict_rot_deg = 2.0;       // strict threshold on the angle, degrees (> 0)
+  double success_trans_m = 0.05;         // RBOT threshold on the 3-D distance, metres (> 0)
+  double success_rot_deg = 5.0;          // RBOT threshold on the angle, degrees (> 0)
+  double strict_trans_m = 0.02;          // strict threshold on the 3-D distance, metres (> 0)
+  double strict_rot_deg = 2.0;           // strict threshold on the angle, degrees (> 0)
   bool rotation_error_in_world = false;  // per-axis rotation error in the world frame
   void Check() const;
 };
@@ -58,11 +57,11 @@ struct GroundTruthFrame {
 
 // Error of one frame that has ground truth.
 struct FrameError {
-  int frame = 0;             // frame id
-  bool has_pose = false;     // the stream has a record for this frame
+  int frame = 0;                            // frame id
+  bool has_pose = false;                    // the stream has a record for this frame
   TrackStatus status = TrackStatus::kLost;  // of the record (kLost when missing)
-  double confidence = 0.0;   // of the record (0 when missing)
-  bool scored = false;       // has_pose && status == kTracking: errors below are valid
+  double confidence = 0.0;                  // of the record (0 when missing)
+  bool scored = false;  // has_pose && status == kTracking: errors below are valid
   Eigen::Vector3d trans_err_mm = Eigen::Vector3d::Zero();  // t_est - t_gt, world, mm
   double trans_err_norm_mm = 0.0;                          // |trans_err_mm|
   Eigen::Vector3d rot_err_deg = Eigen::Vector3d::Zero();   // rotation vector, degrees
@@ -81,19 +80,19 @@ struct ErrorStats {
 struct EvaluationResult {
   EvaluationOptions options;
   std::vector<FrameError> per_frame;  // one per frame with ground truth, sequence order
-  int frames = 0;            // frames with ground truth
-  int scored_frames = 0;     // of those, with a `tracking` pose
-  int lost_frames = 0;       // of those, with a record whose status is lost or searching
-  int missing_frames = 0;    // of those, without a record in the stream
-  int extra_records = 0;     // records whose frame has no ground truth (ignored)
-  double success_rate = 0.0;         // fraction at success_trans_m / success_rot_deg
-  double strict_success_rate = 0.0;  // fraction at strict_trans_m / strict_rot_deg
-  ErrorStats trans_err_mm;           // 3-D distance, mm
-  ErrorStats trans_err_axis_mm[3];   // |x|, |y|, |z|, mm
-  ErrorStats rot_err_deg;            // total angle, degrees
-  ErrorStats rot_err_axis_deg[3];    // |x|, |y|, |z| of the rotation vector, degrees
-  int first_failure_frame = -1;      // frame id, or -1 when every frame succeeds
-  std::optional<double> fps;         // from process_ms, when the stream carries it
+  int frames = 0;                     // frames with ground truth
+  int scored_frames = 0;              // of those, with a `tracking` pose
+  int lost_frames = 0;                // of those, with a record whose status is lost or searching
+  int missing_frames = 0;             // of those, without a record in the stream
+  int extra_records = 0;              // records whose frame has no ground truth (ignored)
+  double success_rate = 0.0;          // fraction at success_trans_m / success_rot_deg
+  double strict_success_rate = 0.0;   // fraction at strict_trans_m / strict_rot_deg
+  ErrorStats trans_err_mm;            // 3-D distance, mm
+  ErrorStats trans_err_axis_mm[3];    // |x|, |y|, |z|, mm
+  ErrorStats rot_err_deg;             // total angle, degrees
+  ErrorStats rot_err_axis_deg[3];     // |x|, |y|, |z| of the rotation vector, degrees
+  int first_failure_frame = -1;       // frame id, or -1 when every frame succeeds
+  std::optional<double> fps;          // from process_ms, when the stream carries it
   std::optional<Rigid3d> obj_gt_from_obj_est;  // the offset removed by align_first
 
   // The summary table (several lines, for people).

@@ -1,13 +1,13 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/eval/evaluation.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
-
-#include <gtest/gtest.h>
 
 #include "unseen/util/error.h"
 
@@ -86,7 +86,7 @@ TEST(Evaluation, RotationAboutObjectZGivesKnownError) {
   EXPECT_NEAR(r.rot_err_axis_deg[2].mean, 3.0, 1e-9);
   EXPECT_NEAR(r.rot_err_axis_deg[0].max, 0.0, 1e-9);
   EXPECT_NEAR(r.rot_err_axis_deg[1].max, 0.0, 1e-9);
-  EXPECT_NEAR(r.trans_err_mm.max, 0.0, 1e-9);  // rotation about the object origin
+  EXPECT_NEAR(r.trans_err_mm.max, 0.0, 1e-9);    // rotation about the object origin
   EXPECT_DOUBLE_EQ(r.success_rate, 1.0);         // 3 deg < 5 deg
   EXPECT_DOUBLE_EQ(r.strict_success_rate, 0.0);  // 3 deg >= 2 deg
   EXPECT_EQ(r.first_failure_frame, -1);
@@ -96,8 +96,7 @@ TEST(Evaluation, RotationAboutObjectZGivesKnownError) {
   world.rotation_error_in_world = true;
   const EvaluationResult rw = Evaluate(gt, poses, world);
   EXPECT_NEAR(rw.rot_err_deg.mean, 3.0, 1e-9);
-  const Eigen::Vector3d expected =
-      gt[5].world_from_obj->rotation() * Eigen::Vector3d(0, 0, 3.0);
+  const Eigen::Vector3d expected = gt[5].world_from_obj->rotation() * Eigen::Vector3d(0, 0, 3.0);
   EXPECT_NEAR((rw.per_frame[5].rot_err_deg - expected).norm(), 0.0, 1e-9);
 }
 

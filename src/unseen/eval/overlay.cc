@@ -1,12 +1,12 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/eval/overlay.h"
 
+#include <fmt/format.h>
+
 #include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <map>
-
-#include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
@@ -31,11 +31,11 @@ std::string Lower(std::string s) {
 }
 
 void DrawOutline(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_from_obj,
-                 const cv::Scalar& color, const OverlayOptions& options,
-                 RenderBuffers* buffers, cv::Mat* image) {
+                 const cv::Scalar& color, const OverlayOptions& options, RenderBuffers* buffers,
+                 cv::Mat* image) {
   if (!cam_from_obj.IsValid()) return;
-  const auto outline = SilhouetteOutline(mesh, camera, cam_from_obj, options.roi_margin_px,
-                                         buffers);
+  const auto outline =
+      SilhouetteOutline(mesh, camera, cam_from_obj, options.roi_margin_px, buffers);
   cv::polylines(*image, outline, /*isClosed=*/true, color, options.line_thickness_px,
                 options.line_thickness_px > 1 ? cv::LINE_AA : cv::LINE_8);
 }
@@ -45,19 +45,18 @@ void DrawOutline(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& c
 void OverlayOptions::Check() const {
   UNSEEN_CHECK(roi_margin_px >= 0, "OverlayOptions: roi_margin_px must be >= 0, got {}",
                roi_margin_px);
-  UNSEEN_CHECK(line_thickness_px >= 1,
-               "OverlayOptions: line_thickness_px must be >= 1, got {}", line_thickness_px);
+  UNSEEN_CHECK(line_thickness_px >= 1, "OverlayOptions: line_thickness_px must be >= 1, got {}",
+               line_thickness_px);
   UNSEEN_CHECK(std::isfinite(font_scale) && font_scale > 0.0,
                "OverlayOptions: font_scale must be > 0, got {}", font_scale);
-  UNSEEN_CHECK(ValidColor(tracking_color) && ValidColor(lost_color) &&
-                   ValidColor(ground_truth_color),
-               "OverlayOptions: colours must be BGR values in [0, 255]");
+  UNSEEN_CHECK(
+      ValidColor(tracking_color) && ValidColor(lost_color) && ValidColor(ground_truth_color),
+      "OverlayOptions: colours must be BGR values in [0, 255]");
 }
 
-std::vector<std::vector<cv::Point>> SilhouetteOutline(const Mesh& mesh,
-                                                      const PinholeCamera& camera,
-                                                      const Rigid3d& cam_from_obj,
-                                                      int margin_px, RenderBuffers* buffers) {
+std::vector<std::vector<cv::Point>> SilhouetteOutline(const Mesh& mesh, const PinholeCamera& camera,
+                                                      const Rigid3d& cam_from_obj, int margin_px,
+                                                      RenderBuffers* buffers) {
   UNSEEN_CHECK(margin_px >= 0, "SilhouetteOutline: margin_px must be >= 0, got {}", margin_px);
   Eigen::Vector3f centre;
   float radius = 0.0f;
@@ -101,8 +100,7 @@ void DrawOverlay(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& c
     const bool tracking = r.status == TrackStatus::kTracking;
     if (tracking || options.draw_lost_pose) {
       DrawOutline(mesh, camera, cam_from_world * r.world_from_obj,
-                  tracking ? options.tracking_color : options.lost_color, options, &buffers,
-                  image);
+                  tracking ? options.tracking_color : options.lost_color, options, &buffers, image);
     }
     text += fmt::format("  {}  conf {:.2f}", ToString(r.status), r.confidence);
     if (tracking && frame.ground_truth && r.world_from_obj.IsValid()) {
@@ -115,12 +113,16 @@ void DrawOverlay(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& c
   }
   const int font = cv::FONT_HERSHEY_SIMPLEX;
   int baseline = 0;
-  const cv::Size size = cv::getTextSize(text, font, options.font_scale, 1, &baseline);
+  double scale = options.font_scale;
+  cv::Size size = cv::getTextSize(text, font, scale, 1, &baseline);
+  if (size.width > image->cols - 12) {  // shrink to fit narrow images
+    scale *= double(image->cols - 12) / size.width;
+    size = cv::getTextSize(text, font, scale, 1, &baseline);
+  }
   const cv::Point origin(6, 6 + size.height);
   cv::rectangle(*image, cv::Point(2, 2), cv::Point(10 + size.width, 10 + size.height + baseline),
                 cv::Scalar(0, 0, 0), cv::FILLED);
-  cv::putText(*image, text, origin, font, options.font_scale, cv::Scalar(255, 255, 255), 1,
-              cv::LINE_AA);
+  cv::putText(*image, text, origin, font, scale, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
 }
 
 struct OverlaySink::Video {
@@ -170,9 +172,8 @@ OverlaySink::~OverlaySink() {
 
 void OverlaySink::Write(const cv::Mat& image_bgr8, int frame_id) {
   UNSEEN_CHECK(image_bgr8.type() == CV_8UC3 && image_bgr8.size() == size_,
-               "overlay '{}': frame {} is {}x{} (type {}), expected {}x{} CV_8UC3", path_,
-               frame_id, image_bgr8.cols, image_bgr8.rows, image_bgr8.type(), size_.width,
-               size_.height);
+               "overlay '{}': frame {} is {}x{} (type {}), expected {}x{} CV_8UC3", path_, frame_id,
+               image_bgr8.cols, image_bgr8.rows, image_bgr8.type(), size_.width, size_.height);
   if (is_video_) {
     video_->writer.write(image_bgr8);
     return;
@@ -188,9 +189,8 @@ void OverlaySink::Write(const cv::Mat& image_bgr8, int frame_id) {
   UNSEEN_CHECK(ok, "overlay: cannot write '{}'", file);
 }
 
-int WriteOverlay(const Sequence& sequence, const std::vector<PoseRecord>& poses,
-                 int camera_index, const std::string& out_path, double fps,
-                 const OverlayOptions& options) {
+int WriteOverlay(const Sequence& sequence, const std::vector<PoseRecord>& poses, int camera_index,
+                 const std::string& out_path, double fps, const OverlayOptions& options) {
   options.Check();
   const Rig& rig = sequence.rig();
   UNSEEN_CHECK(camera_index >= 0 && camera_index < rig.size(),

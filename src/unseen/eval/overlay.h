@@ -6,11 +6,10 @@
 #pragma once
 
 #include <memory>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "unseen/camera/camera.h"
 #include "unseen/geometry/rigid3.h"
@@ -23,10 +22,10 @@ namespace unseen {
 class Sequence;
 
 struct OverlayOptions {
-  int roi_margin_px = 4;       // growth of the bounding-sphere rectangle, px (>= 0)
-  int line_thickness_px = 2;   // outline thickness, px (>= 1)
-  cv::Scalar tracking_color = {0, 255, 0};      // BGR 8-bit: estimate while tracking
-  cv::Scalar lost_color = {0, 0, 255};          // BGR 8-bit: estimate when lost/searching
+  int roi_margin_px = 4;                    // growth of the bounding-sphere rectangle, px (>= 0)
+  int line_thickness_px = 2;                // outline thickness, px (>= 1)
+  cv::Scalar tracking_color = {0, 255, 0};  // BGR 8-bit: estimate while tracking
+  cv::Scalar lost_color = {0, 0, 255};      // BGR 8-bit: estimate when lost/searching
   cv::Scalar ground_truth_color = {255, 128, 0};  // BGR 8-bit: ground truth
   bool draw_ground_truth = true;  // outline of the ground truth when the frame has one
   bool draw_lost_pose = true;     // outline of the reported pose of lost/searching frames
@@ -40,17 +39,16 @@ struct OverlayOptions {
 // cv::findContours). Renders depth/mask only in the model's bounding-sphere rectangle
 // grown by `margin_px`. Empty when the object is not in view. `buffers` (optional) is
 // reused for the render and holds its mask afterwards.
-std::vector<std::vector<cv::Point>> SilhouetteOutline(const Mesh& mesh,
-                                                      const PinholeCamera& camera,
+std::vector<std::vector<cv::Point>> SilhouetteOutline(const Mesh& mesh, const PinholeCamera& camera,
                                                       const Rigid3d& cam_from_obj,
                                                       int margin_px = 4,
                                                       RenderBuffers* buffers = nullptr);
 
 // What to draw over one frame.
 struct OverlayFrame {
-  int frame = 0;                          // frame id, printed
-  const PoseRecord* estimate = nullptr;   // the stream's record of this frame, or null
-  std::optional<Rigid3d> ground_truth;    // world_from_obj, when known
+  int frame = 0;                         // frame id, printed
+  const PoseRecord* estimate = nullptr;  // the stream's record of this frame, or null
+  std::optional<Rigid3d> ground_truth;   // world_from_obj, when known
 };
 
 // Draws the outlines and a status line ("frame N  tracking  conf 0.93  err 3.1 mm 0.8 deg")
@@ -81,8 +79,7 @@ class OverlaySink {
 // the poses of `poses` (matched by frame id) to `out_path` (see OverlaySink); fps <= 0 uses
 // the sequence's. Returns the number of frames written. Throws unseen::Error when the
 // sequence has no model, the camera index is out of range, or the output cannot be written.
-int WriteOverlay(const Sequence& sequence, const std::vector<PoseRecord>& poses,
-                 int camera_index, const std::string& out_path, double fps = 0.0,
-                 const OverlayOptions& options = {});
+int WriteOverlay(const Sequence& sequence, const std::vector<PoseRecord>& poses, int camera_index,
+                 const std::string& out_path, double fps = 0.0, const OverlayOptions& options = {});
 
 }  // namespace unseen

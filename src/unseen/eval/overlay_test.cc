@@ -1,11 +1,11 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/eval/overlay.h"
 
-#include <filesystem>
-#include <set>
-
 #include <gtest/gtest.h>
+
+#include <filesystem>
 #include <opencv2/imgcodecs.hpp>
+#include <set>
 
 #include "unseen/mesh/primitives.h"
 #include "unseen/util/error.h"
@@ -122,9 +122,9 @@ TEST(Overlay, DrawsEstimateAndGroundTruthInTheirColours) {
 
   // Lost: red outline; ground truth 10 px to the right: blue outline.
   record.status = TrackStatus::kLost;
-  Rigid3d world_from_obj_gt = world_from_cam * Rigid3d(CubePose().rotation(),
-                                                       CubePose().translation() +
-                                                           Eigen::Vector3d(0.02, 0, 0));
+  Rigid3d world_from_obj_gt =
+      world_from_cam *
+      Rigid3d(CubePose().rotation(), CubePose().translation() + Eigen::Vector3d(0.02, 0, 0));
   frame.ground_truth = world_from_obj_gt;
   image.setTo(cv::Scalar(0, 0, 0));
   DrawOverlay(cube, camera, cam_from_world, frame, options, &image);
@@ -151,8 +151,7 @@ TEST(Overlay, DrawsEstimateAndGroundTruthInTheirColours) {
   options.draw_ground_truth = false;
   image.setTo(cv::Scalar(0, 0, 0));
   DrawOverlay(cube, camera, cam_from_world, frame, options, &image);
-  EXPECT_EQ(cv::countNonZero(image(cv::Rect(0, 30, camera.width, camera.height - 30))
-                                 .reshape(1)),
+  EXPECT_EQ(cv::countNonZero(image(cv::Rect(0, 30, camera.width, camera.height - 30)).reshape(1)),
             0);
 }
 

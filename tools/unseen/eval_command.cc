@@ -1,0 +1,76 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// `unseen eval SEQ POSES`: scores a pose stream (CSV / JSON lines) or a BOP scene_gt.json
+// against the sequence's ground truth; prints a table or one JSON object.
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "tools/unseen/commands.h"
+#include "unseen/eval/evaluation.h"
+#include "unseen/eval/sequence_poses.h"
+#include "unseen/io/sequence.h"
+#include "unseen/util/error.h"
+
+namespace unseen::cli {
+namespace {
+
+struct EvalArgs {
+  std::string sequence;
+  std::string poses;
+  std::string bop_camera;
+  bool json = false;
+  std::string per_frame_csv;
+  EvaluationOptions options;
+};
+
+void RunEval(const EvalArgs& args) {
+  namespace fs = std::filesystem;
+  UNSEEN_CHECK(fs::exists(args.sequence), "eval: sequence '{}' does not exist", args.sequence);
+  UNSEEN_CHECK(fs::is_regular_file(args.poses), "eval: pose file '{}' does not exist", args.poses);
+  const Sequence sequence = Sequence::Open(args.sequence);
+  const std::vector<GroundTruthFrame> ground_truth = SequenceGroundTruth(sequence);
+  const std::vector<PoseRecord> poses = ReadPosesForSequence(args.poses, sequence, args.bop_camera);
+  const EvaluationResult result = Evaluate(ground_truth, poses, args.options);
+  if (!args.per_frame_csv.empty()) WritePerFrameCsv(args.per_frame_csv, result);
+  if (args.json) {
+    nlohmann::json j = result.ToJson();
+    j["sequence"] = args.sequence;
+    j["poses"] = args.poses;
+    std::printf("%s\n", j.dump().c_str());
+  } else {
+    std::printf("sequence %s\nposes    %s\n\n%s", args.sequence.c_str(), args.poses.c_str(),
+                result.Table().c_str());
+  }
+  std::fflush(stdout);
+}
+
+void AddEvalCommand(CLI::App& app) {
+  auto args = std::make_shared<EvalArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "eval",
+      "Score a pose stream (CSV / JSON lines) or a BOP scene_gt.json against the ground truth "
+      "of a sequence: position and orientation errors, success at 5 cm/5 deg and 2 cm/2 deg, "
+      "lost frames, first failure, fps");
+  cmd->add_option("SEQ", args->sequence, "Sequence folder (with ground truth)")->required();
+  cmd->add_option("POSES", args->poses, "Pose stream (.csv, .jsonl) or BOP scene_gt.json")
+      ->required();
+  cmd->add_flag("--json", args->json, "Print one JSON object instead of the table");
+  cmd->add_flag("--align-first", args->options.align_first,
+                "Remove the offset between the estimated and the true object frame at the "
+                "first tracked frame (objects whose frame the system chose)");
+  cmd->add_flag("--rot-err-world", args->options.rotation_error_in_world,
+                "Per-axis orientation error in the world frame (default: object frame)");
+  cmd->add_option("--per-frame", args->per_frame_csv, "Write per-frame errors to this CSV");
+  cmd->add_option("--bop-camera", args->bop_camera,
+                  "Camera whose frame a BOP scene_gt.json POSES is in (default: the camera "
+                  "folder holding it, else the reference camera)");
+  cmd->callback([args] { RunEval(*args); });
+}
+
+}  // namespace
+
+UNSEEN_REGISTER_COMMAND("eval", AddEvalCommand);
+
+}  // namespace unseen::cli
