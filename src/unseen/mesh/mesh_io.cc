@@ -1,7 +1,14 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/mesh/mesh_io.h"
 
+#include <assimp/config.h>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <assimp/texture.h>
+
 #include <algorithm>
+#include <assimp/Importer.hpp>
 #include <bit>
 #include <cctype>
 #include <cmath>
@@ -10,22 +17,15 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <set>
 #include <sstream>
 #include <string>
 #include <unordered_map>
 #include <utility>
 #include <vector>
-
-#include <assimp/Importer.hpp>
-#include <assimp/config.h>
-#include <assimp/material.h>
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
-#include <assimp/texture.h>
-#include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "unseen/image/image_io.h"
 #include "unseen/util/error.h"
@@ -73,8 +73,10 @@ cv::Mat DecodeEmbeddedTexture(const aiTexture& texture, const std::string& mesh_
     const cv::Mat bytes(1, static_cast<int>(texture.mWidth), CV_8UC1,
                         const_cast<aiTexel*>(texture.pcData));
     const cv::Mat image = cv::imdecode(bytes, cv::IMREAD_ANYCOLOR | cv::IMREAD_ANYDEPTH);
-    UNSEEN_CHECK(!image.empty(), "{}: embedded texture '{}' ({} bytes, format hint '{}') cannot "
-                 "be decoded", mesh_path, name, texture.mWidth, texture.achFormatHint);
+    UNSEEN_CHECK(!image.empty(),
+                 "{}: embedded texture '{}' ({} bytes, format hint '{}') cannot "
+                 "be decoded",
+                 mesh_path, name, texture.mWidth, texture.achFormatHint);
     return ToFloatBgr(image, mesh_path + " embedded texture " + name);
   }
   // aiTexel is laid out b, g, r, a: exactly OpenCV's BGRA.
@@ -187,13 +189,13 @@ std::string ReadPlyTextureComment(const std::string& path) {
 template <typename T>
 T GetField(const json& object, const std::string& key, const std::string& file,
            const std::string& where) {
-  UNSEEN_CHECK(object.is_object() && object.contains(key), "{}: {} has no field '{}'", file,
-               where, key);
+  UNSEEN_CHECK(object.is_object() && object.contains(key), "{}: {} has no field '{}'", file, where,
+               key);
   try {
     return object.at(key).get<T>();
   } catch (const json::exception& e) {
-    ThrowError("{}: {}.{} has the wrong type ({}): {}", file, where, key,
-               object.at(key).dump(), e.what());
+    ThrowError("{}: {}.{} has the wrong type ({}): {}", file, where, key, object.at(key).dump(),
+               e.what());
   }
 }
 
@@ -234,9 +236,9 @@ std::vector<Projector> ReadProjectors(const fs::path& json_path) {
     const std::string pwhere = where + ".cam_from_obj";
     const auto rows = GetField<std::vector<std::vector<double>>>(pose, "rotation", file, pwhere);
     const auto t = GetField<std::vector<double>>(pose, "translation", file, pwhere);
-    UNSEEN_CHECK(rows.size() == 3 && rows[0].size() == 3 && rows[1].size() == 3 &&
-                     rows[2].size() == 3,
-                 "{}: {}.rotation must be 3x3, got {}", file, pwhere, pose["rotation"].dump());
+    UNSEEN_CHECK(
+        rows.size() == 3 && rows[0].size() == 3 && rows[1].size() == 3 && rows[2].size() == 3,
+        "{}: {}.rotation must be 3x3, got {}", file, pwhere, pose["rotation"].dump());
     UNSEEN_CHECK(t.size() == 3, "{}: {}.translation must have 3 entries, got {}", file, pwhere,
                  pose["translation"].dump());
     Eigen::Matrix3d rotation;
@@ -273,8 +275,8 @@ void CheckRawScene(const aiScene& scene, const std::string& path) {
     for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
       const aiVector3D& p = mesh.mVertices[v];
       UNSEEN_CHECK(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z),
-                   "{}: vertex {} of sub-mesh {} is not finite ({} {} {})", path, v, mi, p.x,
-                   p.y, p.z);
+                   "{}: vertex {} of sub-mesh {} is not finite ({} {} {})", path, v, mi, p.x, p.y,
+                   p.z);
     }
     for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
       const aiFace& face = mesh.mFaces[f];
@@ -283,8 +285,8 @@ void CheckRawScene(const aiScene& scene, const std::string& path) {
       any_polygon = any_polygon || face.mNumIndices >= 3;
       for (unsigned k = 0; k < face.mNumIndices; ++k) {
         UNSEEN_CHECK(face.mIndices[k] < mesh.mNumVertices,
-                     "{}: face {} of sub-mesh {} has vertex index {} out of range [0, {})", path,
-                     f, mi, face.mIndices[k], mesh.mNumVertices);
+                     "{}: face {} of sub-mesh {} has vertex index {} out of range [0, {})", path, f,
+                     mi, face.mIndices[k], mesh.mNumVertices);
       }
     }
   }
@@ -314,7 +316,8 @@ void WeldIdenticalVertices(Mesh* mesh) {
     }
     remap[v] = it->second;
   }
-  for (Eigen::Vector3i& t : mesh->triangles) t = Eigen::Vector3i(remap[t[0]], remap[t[1]], remap[t[2]]);
+  for (Eigen::Vector3i& t : mesh->triangles)
+    t = Eigen::Vector3i(remap[t[0]], remap[t[1]], remap[t[2]]);
   mesh->vertices = std::move(out.vertices);
   mesh->normals = std::move(out.normals);
   mesh->uvs = std::move(out.uvs);
@@ -347,7 +350,8 @@ SplitMesh SplitByMaterial(const Mesh& mesh) {
     Eigen::Vector3i tri;
     for (int k = 0; k < 3; ++k) {
       const int v = mesh.triangles[t][k];
-      auto [it, inserted] = index.emplace(std::make_pair(v, m), static_cast<int>(out.source.size()));
+      auto [it, inserted] =
+          index.emplace(std::make_pair(v, m), static_cast<int>(out.source.size()));
       if (inserted) {
         out.source.push_back(v);
         out.material.push_back(m);
@@ -548,8 +552,8 @@ void SavePly(const Mesh& mesh, const fs::path& path, float scale) {
 std::string SanitiseName(const std::string& name) {
   std::string out;
   for (char c : name) {
-    const bool ok = std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' ||
-                    c == '+' || c == '.';
+    const bool ok =
+        std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '+' || c == '.';
     out.push_back(ok ? c : '_');
   }
   return out.empty() ? "material" : out;
@@ -655,21 +659,24 @@ void SaveProjectors(const Mesh& mesh, const fs::path& mesh_path, float scale) {
     SaveColorImage((mesh_path.parent_path() / image_name).string(), p.image);
     const Eigen::Matrix3d r = p.cam_from_obj.RotationMatrix();
     const Eigen::Vector3d t = p.cam_from_obj.translation() * static_cast<double>(scale);
-    json camera = {{"width", p.camera.width}, {"height", p.camera.height},
-                   {"fx", p.camera.fx},       {"fy", p.camera.fy},
-                   {"cx", p.camera.cx},       {"cy", p.camera.cy},
+    json camera = {{"width", p.camera.width},
+                   {"height", p.camera.height},
+                   {"fx", p.camera.fx},
+                   {"fy", p.camera.fy},
+                   {"cx", p.camera.cx},
+                   {"cy", p.camera.cy},
                    {"distortion", p.camera.distortion}};
-    json pose = {{"rotation",
-                  {{r(0, 0), r(0, 1), r(0, 2)}, {r(1, 0), r(1, 1), r(1, 2)},
-                   {r(2, 0), r(2, 1), r(2, 2)}}},
-                 {"translation", {t.x(), t.y(), t.z()}}};
+    json pose = {
+        {"rotation",
+         {{r(0, 0), r(0, 1), r(0, 2)}, {r(1, 0), r(1, 1), r(1, 2)}, {r(2, 0), r(2, 1), r(2, 2)}}},
+        {"translation", {t.x(), t.y(), t.z()}}};
     list.push_back({{"image", image_name}, {"camera", camera}, {"cam_from_obj", pose}});
   }
-  json root = {{"comment",
-                "Projective textures of " + mesh_path.filename().string() +
-                    ": image, pinhole intrinsics (pixels, pixel-centre origin) and "
-                    "cam_from_obj (rotation row-major, translation in the mesh file's units)"},
-               {"projectors", list}};
+  json root = {
+      {"comment", "Projective textures of " + mesh_path.filename().string() +
+                      ": image, pinhole intrinsics (pixels, pixel-centre origin) and "
+                      "cam_from_obj (rotation row-major, translation in the mesh file's units)"},
+      {"projectors", list}};
   std::ofstream out(json_path);
   UNSEEN_CHECK(out.good(), "{}: cannot open for writing", json_path.string());
   out << root.dump(1) << "\n";
@@ -744,8 +751,7 @@ Mesh LoadMesh(const std::string& path, double scale_to_metres) {
       }
       if (has_colours) {
         const aiColor4D& c = sub.mColors[0][v];
-        mesh.colors_bgr.push_back(
-            Eigen::Vector3f(c.b, c.g, c.r).cwiseMax(0.0f).cwiseMin(1.0f));
+        mesh.colors_bgr.push_back(Eigen::Vector3f(c.b, c.g, c.r).cwiseMax(0.0f).cwiseMin(1.0f));
       } else {
         mesh.colors_bgr.emplace_back(1.0f, 1.0f, 1.0f);
       }
@@ -757,8 +763,8 @@ Mesh LoadMesh(const std::string& path, double scale_to_metres) {
       if (face.mNumIndices != 3) continue;
       for (unsigned k = 0; k < 3; ++k) {
         UNSEEN_CHECK(face.mIndices[k] < sub.mNumVertices,
-                     "{}: sub-mesh {} face {} has vertex index {} out of range [0, {})", path,
-                     mi, f, face.mIndices[k], sub.mNumVertices);
+                     "{}: sub-mesh {} face {} has vertex index {} out of range [0, {})", path, mi,
+                     f, face.mIndices[k], sub.mNumVertices);
       }
       mesh.triangles.emplace_back(base + static_cast<int>(face.mIndices[0]),
                                   base + static_cast<int>(face.mIndices[1]),
@@ -823,8 +829,8 @@ void SaveMesh(const Mesh& mesh, const std::string& path, double scale_from_metre
   mesh.Check(path);
   const fs::path file(path);
   const std::string ext = LowerExtension(file);
-  UNSEEN_CHECK(ext == ".ply" || ext == ".obj",
-               "{}: cannot save a mesh as '{}'; use .ply or .obj", path, ext);
+  UNSEEN_CHECK(ext == ".ply" || ext == ".obj", "{}: cannot save a mesh as '{}'; use .ply or .obj",
+               path, ext);
   if (file.has_parent_path()) {
     std::error_code ec;
     fs::create_directories(file.parent_path(), ec);

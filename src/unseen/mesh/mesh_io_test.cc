@@ -1,22 +1,21 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/mesh/mesh_io.h"
 
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <string>
-#include <vector>
-
-#include <gtest/gtest.h>
-#include <assimp/Exporter.hpp>
-#include <assimp/Importer.hpp>
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
 
 #include "unseen/image/image_io.h"
 #include "unseen/mesh/primitives.h"
@@ -70,7 +69,8 @@ cv::Vec3f SampleUv(const cv::Mat& texture, const Eigen::Vector2f& uv) {
   const int y1 = std::min(y0 + 1, texture.rows - 1);
   const float fx = std::clamp(x - x0, 0.0f, 1.0f);
   const float fy = std::clamp(y - y0, 0.0f, 1.0f);
-  return (1 - fy) * ((1 - fx) * texture.at<cv::Vec3f>(y0, x0) + fx * texture.at<cv::Vec3f>(y0, x1)) +
+  return (1 - fy) *
+             ((1 - fx) * texture.at<cv::Vec3f>(y0, x0) + fx * texture.at<cv::Vec3f>(y0, x1)) +
          fy * ((1 - fx) * texture.at<cv::Vec3f>(y1, x0) + fx * texture.at<cv::Vec3f>(y1, x1));
 }
 
@@ -98,8 +98,8 @@ int FindTriangle(const Mesh& mesh, const Mesh& other, int t, float tolerance) {
   for (int s = 0; s < mesh.num_triangles(); ++s) {
     bool same = true;
     for (int k = 0; k < 3 && same; ++k) {
-      same = (mesh.vertices[mesh.triangles[s][k]] - other.vertices[other.triangles[t][k]])
-                 .norm() < tolerance;
+      same = (mesh.vertices[mesh.triangles[s][k]] - other.vertices[other.triangles[t][k]]).norm() <
+             tolerance;
     }
     if (same) return s;
   }
@@ -109,17 +109,16 @@ int FindTriangle(const Mesh& mesh, const Mesh& other, int t, float tolerance) {
 // Same triangles (same winding) and the same surface colour at several points of each.
 void ExpectSameAppearance(const Mesh& expected, const Mesh& actual, float colour_tolerance) {
   ASSERT_EQ(expected.num_triangles(), actual.num_triangles());
-  const Eigen::Vector3f points[] = {{1 / 3.f, 1 / 3.f, 1 / 3.f},
-                                    {0.7f, 0.2f, 0.1f},
-                                    {0.1f, 0.7f, 0.2f},
-                                    {0.2f, 0.1f, 0.7f}};
+  const Eigen::Vector3f points[] = {
+      {1 / 3.f, 1 / 3.f, 1 / 3.f}, {0.7f, 0.2f, 0.1f}, {0.1f, 0.7f, 0.2f}, {0.2f, 0.1f, 0.7f}};
   for (int t = 0; t < expected.num_triangles(); ++t) {
     const int s = FindTriangle(actual, expected, t, 1e-5f);
     ASSERT_GE(s, 0) << "triangle " << t << " not found";
     for (const Eigen::Vector3f& bary : points) {
       const cv::Vec3f a = SurfaceColour(expected, t, bary);
       const cv::Vec3f b = SurfaceColour(actual, s, bary);
-      EXPECT_LT(cv::norm(a - b), colour_tolerance) << "triangle " << t << " at " << bary.transpose();
+      EXPECT_LT(cv::norm(a - b), colour_tolerance)
+          << "triangle " << t << " at " << bary.transpose();
     }
   }
 }
@@ -189,7 +188,8 @@ TEST(DevModels, CubesLoadInMetres) {
       EXPECT_EQ(m.texture.type(), CV_32FC3);
       EXPECT_EQ(m.texture.size(), cv::Size(256, 256));
       // The texture is the file as it is (not flipped): compare with a direct load.
-      const cv::Mat direct = LoadColorImage(kSequences + "/" + sequence + "/models/" + m.texture_path);
+      const cv::Mat direct =
+          LoadColorImage(kSequences + "/" + sequence + "/models/" + m.texture_path);
       EXPECT_EQ(cv::norm(direct, m.texture, cv::NORM_INF), 0.0) << m.texture_path;
     }
     ASSERT_EQ(cube.uvs.size(), cube.vertices.size());
@@ -296,7 +296,8 @@ o second
 usemtl green
 f 1 3 4
 f 1 4 2
-)"), 0.001);
+)"),
+                             0.001);
   EXPECT_EQ(mesh.num_triangles(), 3);
   ASSERT_EQ(mesh.materials.size(), 2u);  // only the used ones
   Eigen::Vector3f lo, hi;
@@ -375,7 +376,8 @@ std::string TexturedPlyText(const std::string& u_name, const std::string& v_name
                             const std::string& texture) {
   return "ply\nformat ascii 1.0\ncomment TextureFile " + texture +
          "\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
-         "property float " + u_name + "\nproperty float " + v_name +
+         "property float " +
+         u_name + "\nproperty float " + v_name +
          "\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
          "0 0 0 0 0\n1 0 0 1 0\n1 1 0 1 1\n0 1 0 0 1\n3 0 1 2\n3 0 2 3\n";
 }
@@ -383,13 +385,16 @@ std::string TexturedPlyText(const std::string& u_name, const std::string& v_name
 TEST_F(MeshIoTest, PlyTextureFileComment) {
   cv::imwrite(Path("tex.png"), TopRedBottomBlue());
   for (const auto& [u, v] : {std::pair{"texture_u", "texture_v"}, std::pair{"s", "t"}}) {
-    const Mesh mesh = LoadMesh(Write(std::string("bop_") + u + ".ply", TexturedPlyText(u, v, "tex.png")));
+    const Mesh mesh =
+        LoadMesh(Write(std::string("bop_") + u + ".ply", TexturedPlyText(u, v, "tex.png")));
     ASSERT_TRUE(mesh.HasUvTexture()) << u;
     EXPECT_EQ(mesh.materials[0].texture_path, "tex.png");
     for (int t = 0; t < mesh.num_triangles(); ++t) {
       const cv::Vec3f c = SurfaceColour(mesh, t, {0.34f, 0.33f, 0.33f});
       const float y = (mesh.vertices[mesh.triangles[t][0]] + mesh.vertices[mesh.triangles[t][1]] +
-                       mesh.vertices[mesh.triangles[t][2]]).y() / 3.0f;
+                       mesh.vertices[mesh.triangles[t][2]])
+                          .y() /
+                      3.0f;
       EXPECT_TRUE(y > 0.5f ? IsRed(c) : IsBlue(c)) << u << " triangle " << t << " " << c;
     }
   }
@@ -417,20 +422,20 @@ TEST_F(MeshIoTest, BadInputThrowsNamingTheFile) {
   const std::string garbage_obj = Write("garbage.obj", std::string(1000, '\x07'));
   ExpectThrowsMentioning([&] { LoadMesh(garbage_obj); }, {garbage_obj});
 
-  const std::string out_of_range = Write(
-      "range.ply", std::string(kPlyHeader3) +
-                       "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
-                       "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
+  const std::string out_of_range =
+      Write("range.ply", std::string(kPlyHeader3) +
+                             "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                             "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
   ExpectThrowsMentioning([&] { LoadMesh(out_of_range); }, {out_of_range});
 
-  const std::string nan_vertex = Write(
-      "nan.ply", std::string(kPlyHeader3) +
-                     "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
-                     "0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n");
+  const std::string nan_vertex =
+      Write("nan.ply", std::string(kPlyHeader3) +
+                           "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                           "0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n");
   ExpectThrowsMentioning([&] { LoadMesh(nan_vertex); }, {nan_vertex});
 
-  const std::string no_faces = Write(
-      "nofaces.ply", std::string(kPlyHeader3) + "end_header\n0 0 0\n1 0 0\n0 1 0\n");
+  const std::string no_faces =
+      Write("nofaces.ply", std::string(kPlyHeader3) + "end_header\n0 0 0\n1 0 0\n0 1 0\n");
   ExpectThrowsMentioning([&] { LoadMesh(no_faces); }, {no_faces});
   const std::string obj_no_faces = Write("nofaces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
   ExpectThrowsMentioning([&] { LoadMesh(obj_no_faces); }, {obj_no_faces});
@@ -501,7 +506,8 @@ std::string QuadGltf(const std::string& image_uri) {
                               "material": 0}]}],
   "materials": [{"name": "painted", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
   "textures": [{"source": 0}],
-  "images": [{"uri": ")" + image_uri + R"("}],
+  "images": [{"uri": ")" +
+         image_uri + R"("}],
   "buffers": [{"byteLength": 92, "uri": "data:application/octet-stream;base64,)" +
          Base64(buffer) + R"("}],
   "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
@@ -524,8 +530,7 @@ void ExpectQuadTopRed(const Mesh& mesh, float x_offset) {
   for (int t = 0; t < mesh.num_triangles(); ++t) {
     for (int k = 0; k < 3; ++k) {
       const int v = mesh.triangles[t][k];
-      const cv::Vec3f c =
-          SampleUv(mesh.materials[mesh.triangle_materials[t]].texture, mesh.uvs[v]);
+      const cv::Vec3f c = SampleUv(mesh.materials[mesh.triangle_materials[t]].texture, mesh.uvs[v]);
       EXPECT_TRUE(mesh.vertices[v].y() > 0.5f ? IsRed(c) : IsBlue(c)) << mesh.vertices[v] << c;
     }
   }
@@ -534,8 +539,7 @@ void ExpectQuadTopRed(const Mesh& mesh, float x_offset) {
 TEST_F(MeshIoTest, GltfEmbeddedTextureAndNodeTransform) {
   std::vector<unsigned char> png;
   cv::imencode(".png", TopRedBottomBlue(), png);
-  const Mesh mesh =
-      LoadMesh(Write("quad.gltf", QuadGltf("data:image/png;base64," + Base64(png))));
+  const Mesh mesh = LoadMesh(Write("quad.gltf", QuadGltf("data:image/png;base64," + Base64(png))));
   ExpectQuadTopRed(mesh, 5.0f);
   EXPECT_EQ(mesh.materials[0].name, "painted");
   EXPECT_EQ(mesh.materials[0].texture_path, "");  // embedded: no file of its own
@@ -615,8 +619,9 @@ TEST_F(MeshIoTest, ColladaKeepsFileAxesAndAppliesUnit) {
   AssimpConvert(obj, "collada", Path("t.dae"));
   std::ifstream in(Path("t.dae"));
   std::string text((std::istreambuf_iterator<char>(in)), {});
-  for (const auto& [from, to] : {std::pair<std::string, std::string>{"Y_UP", "Z_UP"},
-                                 std::pair<std::string, std::string>{"meter=\"1\"", "meter=\"0.01\""}}) {
+  for (const auto& [from, to] :
+       {std::pair<std::string, std::string>{"Y_UP", "Z_UP"},
+        std::pair<std::string, std::string>{"meter=\"1\"", "meter=\"0.01\""}}) {
     const size_t at = text.find(from);
     ASSERT_NE(at, std::string::npos) << from;
     text.replace(at, from.size(), to);
@@ -721,8 +726,9 @@ TEST_F(MeshIoTest, ProjectorsRoundTrip) {
     p.camera.cx = 19.5;
     p.camera.cy = 14.5 + i;
     if (i == 1) p.camera.distortion = {0.1, -0.01, 0.001, 0.002, 0.0};
-    p.cam_from_obj = Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.3 + i, Eigen::Vector3d(1, 2, 3).normalized())),
-                             Eigen::Vector3d(0.01, -0.02, 0.3 + i));
+    p.cam_from_obj = Rigid3d(
+        Eigen::Quaterniond(Eigen::AngleAxisd(0.3 + i, Eigen::Vector3d(1, 2, 3).normalized())),
+        Eigen::Vector3d(0.01, -0.02, 0.3 + i));
     p.image = cv::Mat(p.camera.height, p.camera.width, CV_32FC3);
     cv::randu(p.image, 0.0, 1.0);
     mesh.projectors.push_back(p);

@@ -1,13 +1,13 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/mesh/mesh.h"
 
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <string>
-
-#include <gtest/gtest.h>
-#include <Eigen/Geometry>
 
 #include "unseen/mesh/primitives.h"
 #include "unseen/util/error.h"

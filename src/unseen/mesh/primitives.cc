@@ -1,13 +1,12 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/mesh/primitives.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
-#include <opencv2/imgproc.hpp>
 
 #include "unseen/image/image_io.h"
 #include "unseen/util/error.h"
@@ -28,15 +27,14 @@ cv::Mat ToTexture(const cv::Mat& bgr8) {
 // material `material`. The face lies at `normal * offset` and spans `width` along
 // right = up x normal (texture u) and `height` along `up` (texture v). Since
 // right x up = normal, the triangles are counter-clockwise seen from outside.
-void AddFace(const Eigen::Vector3f& normal, const Eigen::Vector3f& up, float offset,
-             float width, float height, int material, Mesh* mesh) {
+void AddFace(const Eigen::Vector3f& normal, const Eigen::Vector3f& up, float offset, float width,
+             float height, int material, Mesh* mesh) {
   const Eigen::Vector3f right = up.cross(normal);
   const Eigen::Vector3f centre = normal * offset;
   const int base = mesh->num_vertices();
   const float corners[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
   for (const auto& c : corners) {
-    mesh->vertices.push_back(centre + (c[0] - 0.5f) * width * right +
-                             (c[1] - 0.5f) * height * up);
+    mesh->vertices.push_back(centre + (c[0] - 0.5f) * width * right + (c[1] - 0.5f) * height * up);
     mesh->uvs.emplace_back(c[0], c[1]);
     mesh->normals.push_back(normal);
   }
@@ -57,9 +55,9 @@ struct FaceFrame {
   int up_axis;
 };
 const FaceFrame kBoxFaces[6] = {
-    {{1, 0, 0}, {0, 0, 1}, 0, 1, 2},  {{-1, 0, 0}, {0, 0, 1}, 0, 1, 2},
-    {{0, 1, 0}, {0, 0, 1}, 1, 0, 2},  {{0, -1, 0}, {0, 0, 1}, 1, 0, 2},
-    {{0, 0, 1}, {0, 1, 0}, 2, 0, 1},  {{0, 0, -1}, {0, 1, 0}, 2, 0, 1},
+    {{1, 0, 0}, {0, 0, 1}, 0, 1, 2}, {{-1, 0, 0}, {0, 0, 1}, 0, 1, 2},
+    {{0, 1, 0}, {0, 0, 1}, 1, 0, 2}, {{0, -1, 0}, {0, 0, 1}, 1, 0, 2},
+    {{0, 0, 1}, {0, 1, 0}, 2, 0, 1}, {{0, 0, -1}, {0, 1, 0}, 2, 0, 1},
 };
 const char* const kBoxFaceNames[6] = {"+x", "-x", "+y", "-y", "+z", "-z"};
 const char* const kBoxFaceFiles[6] = {"px", "mx", "py", "my", "pz", "mz"};
@@ -227,7 +225,7 @@ cv::Mat MakeGlobeTexture(int width, int height) {
                           static_cast<uchar>(30 + 10 * lat));
     for (int x = 0; x < width; ++x) img.at<cv::Vec3b>(y, x) = ocean;
   }
-  const cv::Scalar land_colours[] = {{40, 150, 50}, {70, 170, 200}, {30, 90, 110},
+  const cv::Scalar land_colours[] = {{40, 150, 50},  {70, 170, 200}, {30, 90, 110},
                                      {60, 200, 120}, {90, 120, 160}, {20, 110, 30}};
   constexpr int kContinents = 9;
   for (int c = 0; c < kContinents; ++c) {
@@ -351,8 +349,8 @@ Mesh MakeTexturedSphere(double radius_m, int rings, int segments, const cv::Mat&
 
 Mesh MakeTexturedBox(const Eigen::Vector3d& size_m, const std::array<cv::Mat, 6>& face_textures) {
   UNSEEN_CHECK(size_m.allFinite() && (size_m.array() > 0.0).all(),
-               "MakeTexturedBox: size_m must be positive and finite, got ({} {} {})",
-               size_m.x(), size_m.y(), size_m.z());
+               "MakeTexturedBox: size_m must be positive and finite, got ({} {} {})", size_m.x(),
+               size_m.y(), size_m.z());
   const Eigen::Vector3f size = size_m.cast<float>();
   std::vector<Material> materials;
   for (int f = 0; f < 6; ++f) {

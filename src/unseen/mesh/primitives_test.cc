@@ -1,12 +1,12 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/mesh/primitives.h"
 
-#include <cmath>
-#include <set>
-
 #include <gtest/gtest.h>
+
 #include <Eigen/Geometry>
+#include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <set>
 
 #include "unseen/util/error.h"
 
