@@ -51,6 +51,13 @@ fs::path ProjectorsPath(const fs::path& mesh_path) {
 // ---------------------------------------------------------------------------------------
 // Loading
 
+// `s` without leading and trailing blanks.
+std::string Trim(const std::string& s) {
+  const size_t first = s.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos) return "";
+  return s.substr(first, s.find_last_not_of(" \t\r\n") + 1 - first);
+}
+
 // Decodes "%20"-style escapes (glTF URIs are percent-encoded).
 std::string PercentDecode(const std::string& s) {
   std::string out;
@@ -110,7 +117,8 @@ class TextureLoader {
 
   // The texture named `reference` by a material (an embedded "*N" / file name, or a file
   // beside the mesh). Throws naming the mesh and the texture when it cannot be read.
-  cv::Mat Load(const std::string& reference) {
+  cv::Mat Load(const std::string& untrimmed_reference) {
+    const std::string reference = Trim(untrimmed_reference);
     if (scene_ != nullptr) {
       if (const aiTexture* embedded = scene_->GetEmbeddedTexture(reference.c_str())) {
         return DecodeEmbeddedTexture(*embedded, mesh_path_, reference);
@@ -156,7 +164,7 @@ Material ConvertMaterial(const aiScene& scene, unsigned index, TextureLoader* te
     aiString reference;
     if (in.GetTexture(type, 0, &reference) != AI_SUCCESS || reference.length == 0) continue;
     out.texture = textures->Load(reference.C_Str());
-    out.texture_path = reference.C_Str();
+    out.texture_path = Trim(reference.C_Str());
     if (!out.texture_path.empty() && out.texture_path[0] == '*') {
       out.texture_path.clear();  // embedded: no file of its own
     }
@@ -178,8 +186,7 @@ std::string ReadPlyTextureComment(const std::string& path) {
     if (comment == "comment" && key == "TextureFile") {
       std::string rest;
       std::getline(words, rest);
-      const size_t first = rest.find_first_not_of(" \t");
-      return first == std::string::npos ? "" : rest.substr(first);
+      return Trim(rest);
     }
   }
   return "";
@@ -775,6 +782,14 @@ Mesh LoadMesh(const std::string& path, double scale_to_metres) {
   UNSEEN_CHECK(!mesh.triangles.empty(), "{}: mesh has no triangles", path);
 
   if (!all_normals) mesh.normals.clear();
+  for (Eigen::Vector3f& n : mesh.normals) {  // node transforms may have scaled them
+    const float length = n.norm();
+    if (!(length > 0.0f && std::isfinite(length))) {  // unusable: drop (computed on need)
+      mesh.normals.clear();
+      break;
+    }
+    n /= length;
+  }
   if (!any_uvs) mesh.uvs.clear();
   if (any_colours) {  // sub-meshes without colours take their material's colour
     for (int v = 0; v < mesh.num_vertices(); ++v) {

@@ -320,6 +320,16 @@ TEST_F(MeshIoTest, ObjQuadsAreTriangulated) {
   EXPECT_NO_THROW(mesh.Check());
 }
 
+TEST_F(MeshIoTest, NormalsAreUnitOrDropped) {
+  const Mesh scaled =
+      LoadMesh(Write("n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 2\nf 1//1 2//1 3//1\n"));
+  ASSERT_EQ(scaled.normals.size(), 3u);
+  for (const Eigen::Vector3f& n : scaled.normals) EXPECT_TRUE(n.isApprox(Eigen::Vector3f(0, 0, 1)));
+  const Mesh zero =
+      LoadMesh(Write("z.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n"));
+  EXPECT_TRUE(zero.normals.empty());
+}
+
 TEST_F(MeshIoTest, ObjMissingTextureNamesBothFiles) {
   Write("quad.mtl", "newmtl tex\nKd 1 1 1\nmap_Kd no_such_texture.png\n");
   const std::string path = Write("quad.obj", kQuadObj);
@@ -374,7 +384,7 @@ end_header
 
 std::string TexturedPlyText(const std::string& u_name, const std::string& v_name,
                             const std::string& texture) {
-  return "ply\nformat ascii 1.0\ncomment TextureFile " + texture +
+  return "ply\nformat ascii 1.0\ncomment TextureFile " + texture + "  " +
          "\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
          "property float " +
          u_name + "\nproperty float " + v_name +
