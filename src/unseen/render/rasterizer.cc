@@ -29,6 +29,7 @@ constexpr int64_t kSubpixel = 1 << kSubpixelBits;  // screen positions snap to 1
 constexpr double kGuardPx = 4096.0;  // triangles are clipped to the image grown by this
 constexpr int kMaxImageSide = 32768;  // keeps snapped coordinates in int32
 constexpr int kMaxMipmapLevels = 12;
+constexpr int kSmallBoxPx = 6;  // bounding boxes up to this many pixels skip span set-up
 
 // A mesh vertex after projection (one per vertex, shared by its triangles).
 struct ProjectedVertex {
@@ -58,11 +59,9 @@ struct RasterTarget {
   size_t w_stride = 0;       // floats per row
 };
 
-inline int64_t FloorDiv(int64_t a, int64_t b) {  // b > 0
-  const int64_t q = a / b;
-  return (a % b != 0 && a < 0) ? q - 1 : q;
-}
-inline int64_t CeilDiv(int64_t a, int64_t b) { return -FloorDiv(-a, b); }
+// floor and ceil of a / kSubpixel (arithmetic shifts, C++20).
+inline int64_t FloorPixel(int64_t a) { return a >> kSubpixelBits; }
+inline int64_t CeilPixel(int64_t a) { return -((-a) >> kSubpixelBits); }
 
 // Top-left rule with y down: an edge whose inward normal (a, b) points right (a > 0, a
 // "left" edge) or, when horizontal, down (a "top" edge) owns the pixel centres on it.
@@ -123,6 +122,15 @@ class EdgeWalker {
   int64_t q_, r_ = 0, s_ = 1, dq_, dr_ = 0;
 };
 
+// a * b + c, fused where the hardware can, so that every code path rounds alike.
+inline float MulAdd(float a, float b, float c) {
+#if defined(__FMA__)
+  return std::fma(a, b, c);
+#else
+  return a * b + c;
+#endif
+}
+
 // Affine screen-space interpolation f(x, y) = f0 + gx (x - x_ref) + gy (y - y_ref) of
 // the corner values f0, f1, f2 (pixels).
 struct Plane {
@@ -144,10 +152,10 @@ void RasterTriangle(RasterVertex v0, RasterVertex v1, RasterVertex v2, bool cull
   }
   const int64_t min_x = std::min({v0.x, v1.x, v2.x}), max_x = std::max({v0.x, v1.x, v2.x});
   const int64_t min_y = std::min({v0.y, v1.y, v2.y}), max_y = std::max({v0.y, v1.y, v2.y});
-  const int x_lo = static_cast<int>(std::max<int64_t>(t.roi.x0, CeilDiv(min_x, kSubpixel)));
-  const int x_hi = static_cast<int>(std::min<int64_t>(t.roi.x1 - 1, FloorDiv(max_x, kSubpixel)));
-  const int y_lo = static_cast<int>(std::max<int64_t>(t.roi.y0, CeilDiv(min_y, kSubpixel)));
-  const int y_hi = static_cast<int>(std::min<int64_t>(t.roi.y1 - 1, FloorDiv(max_y, kSubpixel)));
+  const int x_lo = static_cast<int>(std::max<int64_t>(t.roi.x0, CeilPixel(min_x)));
+  const int x_hi = static_cast<int>(std::min<int64_t>(t.roi.x1 - 1, FloorPixel(max_x)));
+  const int y_lo = static_cast<int>(std::max<int64_t>(t.roi.y0, CeilPixel(min_y)));
+  const int y_hi = static_cast<int>(std::min<int64_t>(t.roi.y1 - 1, FloorPixel(max_y)));
   if (x_lo > x_hi || y_lo > y_hi) return;
 
   // Edge functions E_i = a_i x + b_i y + c_i (x, y in 1/256 px), E_i opposite v_i, positive
@@ -155,35 +163,87 @@ void RasterTriangle(RasterVertex v0, RasterVertex v1, RasterVertex v2, bool cull
   const int64_t a0 = v1.y - v2.y, b0 = v2.x - v1.x;
   const int64_t a1 = v2.y - v0.y, b1 = v0.x - v2.x;
   const int64_t a2 = v0.y - v1.y, b2 = v1.x - v0.x;
-  const int64_t px = x_lo * kSubpixel, py = y_lo * kSubpixel;
-  EdgeWalker edge0(a0 * (px - v1.x) + b0 * (py - v1.y) + FillBias(a0, b0), a0 * kSubpixel,
-                   b0 * kSubpixel);
-  EdgeWalker edge1(a1 * (px - v2.x) + b1 * (py - v2.y) + FillBias(a1, b1), a1 * kSubpixel,
-                   b1 * kSubpixel);
-  EdgeWalker edge2(a2 * (px - v0.x) + b2 * (py - v0.y) + FillBias(a2, b2), a2 * kSubpixel,
-                   b2 * kSubpixel);
+  const int64_t bias0 = FillBias(a0, b0), bias1 = FillBias(a1, b1), bias2 = FillBias(a2, b2);
 
-  // Barycentric l_k = E_k / area2; dl_k/dx = a_k * 256 / area2 per pixel.
-  const double s = static_cast<double>(kSubpixel) / static_cast<double>(area2);
-  const double l1x = a1 * s, l2x = a2 * s, l1y = b1 * s, l2y = b2 * s;
-  auto make_plane = [&](double f0, double f1, double f2) {
-    return Plane{static_cast<float>(f0), static_cast<float>(l1x * (f1 - f0) + l2x * (f2 - f0)),
-                 static_cast<float>(l1y * (f1 - f0) + l2y * (f2 - f0))};
-  };
+  // Interpolation planes, set up once the triangle is known to cover a pixel.
+  Plane pz{}, pw1{}, pw2{};
   const float x_ref = static_cast<float>(v0.x) / kSubpixel;
   const float y_ref = static_cast<float>(v0.y) / kSubpixel;
-  const Plane pz = make_plane(v0.inv_z, v1.inv_z, v2.inv_z);
-  Plane pw1{}, pw2{};
-  if constexpr (kAttributes) {
-    // w / z is affine in screen space (perspective-correct interpolation).
-    pw1 = make_plane(double(v0.inv_z) * v0.w1, double(v1.inv_z) * v1.w1, double(v2.inv_z) * v2.w1);
-    pw2 = make_plane(double(v0.inv_z) * v0.w2, double(v1.inv_z) * v1.w2, double(v2.inv_z) * v2.w2);
-  }
+  auto setup_planes = [&] {
+    // Barycentric l_k = E_k / area2; dl_k/dx = a_k * 256 / area2 per pixel.
+    const double s = static_cast<double>(kSubpixel) / static_cast<double>(area2);
+    const double l1x = a1 * s, l2x = a2 * s, l1y = b1 * s, l2y = b2 * s;
+    auto make_plane = [&](double f0, double f1, double f2) {
+      return Plane{static_cast<float>(f0), static_cast<float>(l1x * (f1 - f0) + l2x * (f2 - f0)),
+                   static_cast<float>(l1y * (f1 - f0) + l2y * (f2 - f0))};
+    };
+    pz = make_plane(v0.inv_z, v1.inv_z, v2.inv_z);
+    if constexpr (kAttributes) {
+      // w / z is affine in screen space (perspective-correct interpolation).
+      pw1 = make_plane(double(v0.inv_z) * v0.w1, double(v1.inv_z) * v1.w1,
+                       double(v2.inv_z) * v2.w1);
+      pw2 = make_plane(double(v0.inv_z) * v0.w2, double(v1.inv_z) * v1.w2,
+                       double(v2.inv_z) * v2.w2);
+    }
+  };
   // Row pointers address image column 0 of the roi-sized buffers.
   float* const z_base = t.inv_z - t.roi.x0;
   int32_t* const id_base = kIds ? t.ids - t.roi.x0 : nullptr;
   float* const w_base = kAttributes ? t.weights - 2 * t.roi.x0 : nullptr;
   const ptrdiff_t z_stride = t.z_stride, id_stride = t.id_stride, w_stride = t.w_stride;
+  // Depth test and write of pixels [x_begin, x_end] of row y (all inside).
+  auto write_span = [&](int y, int x_begin, int x_end) {
+    const float dy = static_cast<float>(y) - y_ref;
+    const float z_row = MulAdd(pz.gy, dy, pz.f0);
+    float w1_row = 0.0f, w2_row = 0.0f;
+    if constexpr (kAttributes) {
+      w1_row = MulAdd(pw1.gy, dy, pw1.f0);
+      w2_row = MulAdd(pw2.gy, dy, pw2.f0);
+    }
+    const ptrdiff_t row = y - t.roi.y0;
+    float* z_ptr = z_base + row * z_stride;
+    int32_t* id_ptr = kIds ? id_base + row * id_stride : nullptr;
+    float* w_ptr = kAttributes ? w_base + row * w_stride : nullptr;
+    float dx = static_cast<float>(x_begin) - x_ref;  // exact, and so are its increments
+    for (int x = x_begin; x <= x_end; ++x, dx += 1.0f) {
+      const float inv_z = MulAdd(pz.gx, dx, z_row);
+      if (inv_z > z_ptr[x]) {
+        z_ptr[x] = inv_z;
+        if constexpr (kIds) id_ptr[x] = id;
+        if constexpr (kAttributes) {
+          w_ptr[2 * x] = MulAdd(pw1.gx, dx, w1_row);
+          w_ptr[2 * x + 1] = MulAdd(pw2.gx, dx, w2_row);
+        }
+      }
+    }
+  };
+
+  if ((x_hi - x_lo + 1) * (y_hi - y_lo + 1) <= kSmallBoxPx) {
+    // Tiny triangles (dense meshes): test the few pixel centres directly.
+    bool ready = false;
+    for (int y = y_lo; y <= y_hi; ++y) {
+      const int64_t py = y * kSubpixel;
+      for (int x = x_lo; x <= x_hi; ++x) {
+        const int64_t px = x * kSubpixel;
+        const int64_t e0 = a0 * (px - v1.x) + b0 * (py - v1.y) + bias0;
+        const int64_t e1 = a1 * (px - v2.x) + b1 * (py - v2.y) + bias1;
+        const int64_t e2 = a2 * (px - v0.x) + b2 * (py - v0.y) + bias2;
+        if ((e0 | e1 | e2) < 0) continue;
+        if (!ready) {
+          setup_planes();
+          ready = true;
+        }
+        write_span(y, x, x);
+      }
+    }
+    return;
+  }
+
+  const int64_t px = x_lo * kSubpixel, py = y_lo * kSubpixel;
+  EdgeWalker edge0(a0 * (px - v1.x) + b0 * (py - v1.y) + bias0, a0 * kSubpixel, b0 * kSubpixel);
+  EdgeWalker edge1(a1 * (px - v2.x) + b1 * (py - v2.y) + bias1, a1 * kSubpixel, b1 * kSubpixel);
+  EdgeWalker edge2(a2 * (px - v0.x) + b2 * (py - v0.y) + bias2, a2 * kSubpixel, b2 * kSubpixel);
+  setup_planes();
   for (int y = y_lo; y <= y_hi; ++y, edge0.NextRow(), edge1.NextRow(), edge2.NextRow()) {
     // The span [x_lo + lo, x_lo + hi] of centres inside all three edges, exactly.
     int64_t lo = 0, hi = x_hi - x_lo;
@@ -192,30 +252,7 @@ void RasterTriangle(RasterVertex v0, RasterVertex v1, RasterVertex v2, bool cull
     edge1.Narrow(&lo, &hi, &ok);
     edge2.Narrow(&lo, &hi, &ok);
     if (!ok || lo > hi) continue;
-    const int x_begin = x_lo + static_cast<int>(lo), x_end = x_lo + static_cast<int>(hi);
-    const float dy = static_cast<float>(y) - y_ref;
-    const float z_row = pz.f0 + pz.gy * dy;
-    float w1_row = 0.0f, w2_row = 0.0f;
-    if constexpr (kAttributes) {
-      w1_row = pw1.f0 + pw1.gy * dy;
-      w2_row = pw2.f0 + pw2.gy * dy;
-    }
-    const ptrdiff_t row = y - t.roi.y0;
-    float* z_ptr = z_base + row * z_stride;
-    int32_t* id_ptr = kIds ? id_base + row * id_stride : nullptr;
-    float* w_ptr = kAttributes ? w_base + row * w_stride : nullptr;
-    float dx = static_cast<float>(x_begin) - x_ref;  // exact, and so are its increments
-    for (int x = x_begin; x <= x_end; ++x, dx += 1.0f) {
-      const float inv_z = z_row + pz.gx * dx;
-      if (inv_z > z_ptr[x]) {
-        z_ptr[x] = inv_z;
-        if constexpr (kIds) id_ptr[x] = id;
-        if constexpr (kAttributes) {
-          w_ptr[2 * x] = w1_row + pw1.gx * dx;
-          w_ptr[2 * x + 1] = w2_row + pw2.gx * dx;
-        }
-      }
-    }
+    write_span(y, x_lo + static_cast<int>(lo), x_lo + static_cast<int>(hi));
   }
 }
 
@@ -315,6 +352,8 @@ void RasterMesh(const Mesh& mesh, const Eigen::Vector2f* uvs,
                 const std::vector<ProjectedVertex>& projected, bool cull, const ClipContext& clip,
                 const RasterTarget& target, TexelStats* stats) {
   const Eigen::Vector2f corners[3] = {{0.0f, 0.0f}, {1.0f, 0.0f}, {0.0f, 1.0f}};
+  const int64_t x_first = target.roi.x0, x_last = target.roi.x1 - 1;
+  const int64_t y_first = target.roi.y0, y_last = target.roi.y1 - 1;
   const uint32_t nv = static_cast<uint32_t>(mesh.vertices.size());
   const int nt = mesh.num_triangles();
   for (int t = 0; t < nt; ++t) {
@@ -334,11 +373,13 @@ void RasterMesh(const Mesh& mesh, const Eigen::Vector2f* uvs,
       w[2] = uvs[tri[2]];
     }
     if (p0.ok & p1.ok & p2.ok) {
+      // Cheap rejections before the set-up: culled, degenerate, no pixel centre in the roi.
+      const int64_t area2 = int64_t(p1.x - p0.x) * (p2.y - p0.y) -
+                            int64_t(p2.x - p0.x) * (p1.y - p0.y);
+      if (area2 == 0 || (cull && area2 > 0)) continue;
       if (stats != nullptr) {
         const int m = mesh.triangle_materials.empty() ? 0 : mesh.triangle_materials[t];
-        const int64_t area2 = int64_t(p1.x - p0.x) * (p2.y - p0.y) -
-                              int64_t(p2.x - p0.x) * (p1.y - p0.y);
-        if (stats->texture_size[m] > 0.0 && area2 != 0 && !(cull && area2 > 0)) {
+        if (stats->texture_size[m] > 0.0) {
           const Eigen::Vector2f& u0 = mesh.uvs[tri[0]];
           const Eigen::Vector2f d1 = mesh.uvs[tri[1]] - u0, d2 = mesh.uvs[tri[2]] - u0;
           stats->texels[m] += std::abs(double(d1.x()) * d2.y() - double(d1.y()) * d2.x()) *
@@ -346,6 +387,11 @@ void RasterMesh(const Mesh& mesh, const Eigen::Vector2f* uvs,
           stats->pixels[m] += std::abs(double(area2)) / double(kSubpixel * kSubpixel);
         }
       }
+      const int64_t x_lo = std::max(x_first, CeilPixel(std::min({p0.x, p1.x, p2.x})));
+      const int64_t x_hi = std::min(x_last, FloorPixel(std::max({p0.x, p1.x, p2.x})));
+      const int64_t y_lo = std::max(y_first, CeilPixel(std::min({p0.y, p1.y, p2.y})));
+      const int64_t y_hi = std::min(y_last, FloorPixel(std::max({p0.y, p1.y, p2.y})));
+      if (x_lo > x_hi || y_lo > y_hi) continue;
       RasterTriangle<kAttributes, kIds>({p0.x, p0.y, p0.inv_z, w[0].x(), w[0].y()},
                                         {p1.x, p1.y, p1.inv_z, w[1].x(), w[1].y()},
                                         {p2.x, p2.y, p2.inv_z, w[2].x(), w[2].y()}, cull, t,
