@@ -860,14 +860,14 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
       const float* w = out->scratch_weights.ptr<float>(y);
       const int32_t* id = need_ids ? ids.ptr<int32_t>(y) : nullptr;
       if (uv_mode) {
-        const TextureView* textures = shader.textures();
+        const TextureView* views = shader.textures();
         const std::vector<int>& materials = mesh.triangle_materials;
         for (int x = 0; x < width; ++x) {
           if (!m[x]) {
             color[3 * x] = color[3 * x + 1] = color[3 * x + 2] = 0.0f;
             continue;
           }
-          const TextureView& texture = single_material ? textures[0] : textures[materials[id[x]]];
+          const TextureView& texture = single_material ? views[0] : views[materials[id[x]]];
           SampleWrap(texture, w[2 * x] * z[x], w[2 * x + 1] * z[x], color + 3 * x);
         }
       } else {
