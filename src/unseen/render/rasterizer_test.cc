@@ -144,6 +144,50 @@ TEST(Rasterizer, FrontoParallelPlaneHasExactDepthAndCoverage) {
   EXPECT_EQ(out.color.at<cv::Vec3f>(5, 5), cv::Vec3f(0, 0, 0));
 }
 
+TEST(Rasterizer, TriangleIdsNameTheVisibleTriangle) {
+  const PinholeCamera cam = TestCamera();
+  // Triangle 0 = (top-left, bottom-left, bottom-right), 1 = (top-left, bottom-right,
+  // top-right).
+  const Mesh quad = MakeScreenQuad(cam, 20.5, 10.5, 120.5, 110.5, 1.0);
+  RenderOptions options;
+  options.write_triangle_ids = true;
+  RenderBuffers out;
+  Render(quad, cam, Rigid3d(), cam.ImageRect(), options, &out);
+  ASSERT_EQ(out.triangle_id.type(), CV_32SC1);
+  EXPECT_EQ(out.triangle_id.at<int>(100, 30), 0);  // bottom-left
+  EXPECT_EQ(out.triangle_id.at<int>(20, 110), 1);  // top-right
+  EXPECT_EQ(out.triangle_id.at<int>(5, 5), -1);
+  EXPECT_EQ(cv::countNonZero(out.triangle_id >= 0), 100 * 100);
+}
+
+TEST(Rasterizer, HugeTrianglesAreClippedToTheGuardBand) {
+  const PinholeCamera cam = TestCamera();
+  // Corners thousands of metres off-axis project far beyond the fixed-point range.
+  const float h = 5000.0f, z = 2.0f;
+  const Mesh quad = MakeQuad({{-h, -h, z}, {-h, h, z}, {h, h, z}, {h, -h, z}});
+  RenderBuffers out;
+  Render(quad, cam, Rigid3d(), cam.ImageRect(), RenderOptions(), &out);
+  EXPECT_EQ(cv::countNonZero(out.mask), cam.width * cam.height);
+  double lo, hi;
+  cv::minMaxLoc(out.depth, &lo, &hi);
+  EXPECT_NEAR(lo, z, 1e-6 * z);
+  EXPECT_NEAR(hi, z, 1e-6 * z);
+}
+
+TEST(Rasterizer, NonFiniteTextureCoordinatesGiveFiniteColours) {
+  const PinholeCamera cam = TestCamera();
+  Mesh quad = MakeScreenQuad(cam, 9.5, 9.5, 29.5, 29.5, 1.0);
+  const float nan = std::nanf("");
+  quad.uvs = {{nan, 1}, {0, nan}, {1e30f, 0}, {1, -1e30f}};
+  Material material;
+  material.texture = RandomTexture(8, 8, 1);
+  quad.materials = {material};
+  RenderBuffers out;
+  Render(quad, cam, Rigid3d(), cam.ImageRect(), RenderOptions(), &out);
+  EXPECT_EQ(cv::countNonZero(out.mask), 400);
+  EXPECT_TRUE(cv::checkRange(out.color, true, nullptr, 0.0, 1.0));
+}
+
 TEST(Rasterizer, TiltedPlaneDepthMatchesRayIntersection) {
   const PinholeCamera cam = TestCamera();
   // A large quad in the plane through (0, 0, 2) with normal n, seen from the front.
