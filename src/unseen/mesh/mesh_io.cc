@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -298,6 +299,229 @@ void CheckRawScene(const aiScene& scene, const std::string& path) {
     }
   }
   UNSEEN_CHECK(any_polygon, "{}: mesh has no triangles (only points or lines)", path);
+}
+
+// Per-face texture coordinates of a PLY (MeshLab style: a face list property `texcoord`
+// with u, v per corner). assimp stores them per vertex, keeping one corner's value where
+// faces disagree, which garbles textures along seams; they are read here instead.
+struct PlyFaceTexcoords {
+  std::vector<std::vector<int64_t>> indices;   // per face, vertex indices as in the file
+  std::vector<std::vector<double>> texcoords;  // per face, u0 v0 u1 v1 ...
+  bool several_textures = false;               // a `texnumber` other than 0 was seen
+};
+
+// Reads the face texcoords of a PLY; std::nullopt when it has none. Throws naming the file
+// for a header or body it cannot parse.
+std::optional<PlyFaceTexcoords> ReadPlyFaceTexcoords(const std::string& path) {
+  enum class Format { kAscii, kLittle, kBig };
+  struct Property {
+    std::string name;
+    std::string type;        // scalar type, or list item type
+    std::string count_type;  // non-empty for lists
+  };
+  struct Element {
+    std::string name;
+    int64_t count = 0;
+    std::vector<Property> properties;
+  };
+  auto type_size = [&](const std::string& t) -> int {
+    if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+    if (t == "int" || t == "uint" || t == "int32" || t == "uint32" || t == "float" ||
+        t == "float32")
+      return 4;
+    if (t == "double" || t == "float64") return 8;
+    ThrowError("{}: PLY property type '{}' is not valid", path, t);
+  };
+
+  std::ifstream in(path, std::ios::binary);
+  UNSEEN_CHECK(in.good(), "{}: cannot open", path);
+  std::string line;
+  Format format = Format::kAscii;
+  std::vector<Element> elements;
+  bool has_face_texcoords = false;
+  bool header_done = false;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    if (keyword == "end_header") {
+      header_done = true;
+      break;
+    }
+    if (keyword == "format") {
+      std::string name;
+      words >> name;
+      format = name == "ascii"                  ? Format::kAscii
+               : name == "binary_little_endian" ? Format::kLittle
+               : name == "binary_big_endian"
+                   ? Format::kBig
+                   : throw Error(fmt::format("{}: unknown PLY format '{}'", path, name));
+    } else if (keyword == "element") {
+      Element e;
+      words >> e.name >> e.count;
+      UNSEEN_CHECK(!words.fail() && e.count >= 0, "{}: malformed PLY header line '{}'", path, line);
+      elements.push_back(e);
+    } else if (keyword == "property") {
+      UNSEEN_CHECK(!elements.empty(), "{}: PLY property before any element: '{}'", path, line);
+      Property p;
+      std::string type;
+      words >> type;
+      if (type == "list") {
+        words >> p.count_type >> p.type >> p.name;
+        type_size(p.count_type);
+      } else {
+        p.type = type;
+        words >> p.name;
+      }
+      type_size(p.type);
+      UNSEEN_CHECK(!words.fail(), "{}: malformed PLY header line '{}'", path, line);
+      if (elements.back().name == "face" && !p.count_type.empty() && p.name == "texcoord") {
+        has_face_texcoords = true;
+      }
+      elements.back().properties.push_back(p);
+    }
+  }
+  UNSEEN_CHECK(header_done, "{}: PLY header has no end_header", path);
+  if (!has_face_texcoords) return std::nullopt;
+
+  auto read_value = [&](const std::string& type) -> double {
+    if (format == Format::kAscii) {
+      double value;
+      in >> value;
+      UNSEEN_CHECK(!in.fail(), "{}: PLY body ends early or holds a non-number", path);
+      return value;
+    }
+    const int size = std::clamp(type_size(type), 1, 8);
+    unsigned char bytes[8] = {};
+    in.read(reinterpret_cast<char*>(bytes), size);
+    UNSEEN_CHECK(in.gcount() == size, "{}: PLY body ends early", path);
+    if ((format == Format::kBig) == (std::endian::native == std::endian::little)) {
+      std::reverse(bytes, bytes + size);
+    }
+    auto as = [&](auto v) {
+      std::memcpy(&v, bytes, sizeof(v));
+      return static_cast<double>(v);
+    };
+    if (type == "char" || type == "int8") return as(int8_t());
+    if (type == "uchar" || type == "uint8") return as(uint8_t());
+    if (type == "short" || type == "int16") return as(int16_t());
+    if (type == "ushort" || type == "uint16") return as(uint16_t());
+    if (type == "int" || type == "int32") return as(int32_t());
+    if (type == "uint" || type == "uint32") return as(uint32_t());
+    if (type == "float" || type == "float32") return as(float());
+    return as(double());
+  };
+
+  PlyFaceTexcoords result;
+  for (const Element& e : elements) {
+    const bool is_face = e.name == "face";
+    const bool fixed_size = std::all_of(e.properties.begin(), e.properties.end(),
+                                        [](const Property& p) { return p.count_type.empty(); });
+    if (!is_face && fixed_size && format != Format::kAscii) {  // skip in one go
+      int64_t stride = 0;
+      for (const Property& p : e.properties) stride += type_size(p.type);
+      in.seekg(stride * e.count, std::ios::cur);
+      UNSEEN_CHECK(in.good(), "{}: PLY body ends early", path);
+      continue;
+    }
+    for (int64_t i = 0; i < e.count; ++i) {
+      std::vector<int64_t> indices;
+      std::vector<double> texcoords;
+      for (const Property& p : e.properties) {
+        if (p.count_type.empty()) {
+          const double value = read_value(p.type);
+          if (is_face && p.name == "texnumber" && value != 0.0) result.several_textures = true;
+          continue;
+        }
+        const double count = read_value(p.count_type);
+        UNSEEN_CHECK(count >= 0 && count <= 1e6, "{}: PLY {} {} has a list of {} entries", path,
+                     e.name, i, count);
+        const bool wanted_indices =
+            is_face && (p.name == "vertex_indices" || p.name == "vertex_index");
+        const bool wanted_texcoords = is_face && p.name == "texcoord";
+        for (int k = 0; k < static_cast<int>(count); ++k) {
+          const double value = read_value(p.type);
+          if (wanted_indices) indices.push_back(static_cast<int64_t>(value));
+          if (wanted_texcoords) texcoords.push_back(value);
+        }
+      }
+      if (is_face) {
+        result.indices.push_back(std::move(indices));
+        result.texcoords.push_back(std::move(texcoords));
+      }
+    }
+  }
+  return result;
+}
+
+// Gives every face corner of assimp's raw PLY mesh its own vertex carrying the face's
+// texture coordinates (positions, normals and colours copied).
+void ApplyPlyFaceTexcoords(const PlyFaceTexcoords& faces, const std::string& path, aiScene* scene) {
+  UNSEEN_CHECK(!faces.several_textures,
+               "{}: PLY faces use several textures (texnumber); only one is supported", path);
+  UNSEEN_CHECK(scene->mNumMeshes == 1 && scene->mMeshes[0]->mNumFaces == faces.indices.size(),
+               "{}: per-face texture coordinates do not match the faces read ({} faces in the "
+               "file)",
+               path, faces.indices.size());
+  aiMesh& mesh = *scene->mMeshes[0];
+  unsigned corners = 0;
+  for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+    const aiFace& face = mesh.mFaces[f];
+    UNSEEN_CHECK(
+        face.mNumIndices == faces.indices[f].size() &&
+            std::equal(face.mIndices, face.mIndices + face.mNumIndices, faces.indices[f].begin(),
+                       [](unsigned a, int64_t b) { return int64_t(a) == b; }),
+        "{}: face {} of the file does not match the face read", path, f);
+    UNSEEN_CHECK(faces.texcoords[f].size() == 2 * size_t(face.mNumIndices),
+                 "{}: face {} has {} texcoord values for {} corners (expected u, v per corner)",
+                 path, f, faces.texcoords[f].size(), face.mNumIndices);
+    corners += face.mNumIndices;
+  }
+  auto* vertices = new aiVector3D[corners];
+  auto* uvs = new aiVector3D[corners];
+  aiVector3D* normals = mesh.HasNormals() ? new aiVector3D[corners] : nullptr;
+  aiColor4D* colours = mesh.HasVertexColors(0) ? new aiColor4D[corners] : nullptr;
+  unsigned c = 0;
+  for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+    aiFace& face = mesh.mFaces[f];
+    for (unsigned k = 0; k < face.mNumIndices; ++k, ++c) {
+      const unsigned v = face.mIndices[k];
+      vertices[c] = mesh.mVertices[v];
+      if (normals) normals[c] = mesh.mNormals[v];
+      if (colours) colours[c] = mesh.mColors[0][v];
+      uvs[c] = aiVector3D(static_cast<float>(faces.texcoords[f][2 * k]),
+                          static_cast<float>(faces.texcoords[f][2 * k + 1]), 0.0f);
+      face.mIndices[k] = c;
+    }
+  }
+  delete[] mesh.mVertices;
+  mesh.mVertices = vertices;
+  if (normals) {
+    delete[] mesh.mNormals;
+    mesh.mNormals = normals;
+  }
+  if (colours) {
+    delete[] mesh.mColors[0];
+    mesh.mColors[0] = colours;
+  }
+  for (unsigned k = 1; k < AI_MAX_NUMBER_OF_COLOR_SETS; ++k) {
+    delete[] mesh.mColors[k];
+    mesh.mColors[k] = nullptr;
+  }
+  for (unsigned k = 0; k < AI_MAX_NUMBER_OF_TEXTURECOORDS; ++k) {
+    delete[] mesh.mTextureCoords[k];
+    mesh.mTextureCoords[k] = nullptr;
+    mesh.mNumUVComponents[k] = 0;
+  }
+  mesh.mTextureCoords[0] = uvs;
+  mesh.mNumUVComponents[0] = 2;
+  delete[] mesh.mTangents;
+  mesh.mTangents = nullptr;
+  delete[] mesh.mBitangents;
+  mesh.mBitangents = nullptr;
+  mesh.mNumVertices = corners;
 }
 
 // Merges vertices whose position and every attribute are bit-identical (assimp gives
@@ -709,6 +933,12 @@ Mesh LoadMesh(const std::string& path, double scale_to_metres) {
   // assimp's post-processing asserts (aborts) on some malformed data that its validation
   // lets through, e.g. faces without indices: check the raw data first.
   CheckRawScene(*scene, path);
+  if (LowerExtension(path) == ".ply") {
+    if (const auto face_texcoords = ReadPlyFaceTexcoords(path)) {
+      // The scene is the importer's to modify until post-processing.
+      ApplyPlyFaceTexcoords(*face_texcoords, path, const_cast<aiScene*>(scene));
+    }
+  }
   // (No aiProcess_JoinIdenticalVertices: assimp 5.2 merges vertices whose colours differ;
   // WeldIdenticalVertices does it afterwards.)
   scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_PreTransformVertices |

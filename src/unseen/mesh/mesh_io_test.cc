@@ -3,12 +3,14 @@
 
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <fmt/ranges.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -408,6 +410,81 @@ TEST_F(MeshIoTest, PlyTextureFileComment) {
       EXPECT_TRUE(y > 0.5f ? IsRed(c) : IsBlue(c)) << u << " triangle " << t << " " << c;
     }
   }
+}
+
+// Appends `value` to `bytes` in little- or big-endian order.
+template <typename T>
+void PutBinary(T value, bool big_endian, std::string* bytes) {
+  char raw[sizeof(T)];
+  std::memcpy(raw, &value, sizeof(T));
+  if (big_endian) std::reverse(raw, raw + sizeof(T));
+  bytes->append(raw, sizeof(T));
+}
+
+// A unit quad whose two triangles take their uvs per face (MeshLab's `texcoord` list): the
+// first maps to the left half of the texture, the second to the right half, and the shared
+// vertices 0 and 2 have different uvs in the two faces.
+std::string SeamPly(const std::string& format) {
+  const float positions[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  const int faces[2][3] = {{0, 1, 2}, {0, 2, 3}};
+  const float uvs[2][6] = {{0, 0, 0.5f, 0, 0.5f, 1}, {0.5f, 0, 1, 1, 0.5f, 1}};
+  std::string text = "ply\nformat " + format +
+                     " 1.0\ncomment TextureFile halves.png\nelement vertex 4\n"
+                     "property float x\nproperty float y\nproperty float z\nelement face 2\n"
+                     "property list uchar int vertex_indices\nproperty list uchar float texcoord\n"
+                     "property int texnumber\nend_header\n";
+  const bool big = format == "binary_big_endian";
+  for (const auto& p : positions) {
+    if (format == "ascii") {
+      text += fmt::format("{} {} {}\n", p[0], p[1], p[2]);
+    } else {
+      for (float x : p) PutBinary(x, big, &text);
+    }
+  }
+  for (int f = 0; f < 2; ++f) {
+    if (format == "ascii") {
+      text += fmt::format("3 {} {} {} 6 {} 0\n", faces[f][0], faces[f][1], faces[f][2],
+                          fmt::join(uvs[f], " "));
+    } else {
+      PutBinary<uint8_t>(3, big, &text);
+      for (int i : faces[f]) PutBinary<int32_t>(i, big, &text);
+      PutBinary<uint8_t>(6, big, &text);
+      for (float x : uvs[f]) PutBinary(x, big, &text);
+      PutBinary<int32_t>(0, big, &text);
+    }
+  }
+  return text;
+}
+
+TEST_F(MeshIoTest, PlyPerFaceTexcoordsKeepSeams) {
+  cv::Mat halves(8, 8, CV_8UC3, cv::Scalar(255, 0, 0));  // blue
+  halves.colRange(0, 4).setTo(cv::Scalar(0, 0, 255));    // left half red
+  cv::imwrite(Path("halves.png"), halves);
+  for (const std::string format : {"ascii", "binary_little_endian", "binary_big_endian"}) {
+    SCOPED_TRACE(format);
+    const Mesh mesh = LoadMesh(Write(format + ".ply", SeamPly(format)));
+    ASSERT_EQ(mesh.num_triangles(), 2);
+    ASSERT_TRUE(mesh.HasUvTexture());
+    for (int t = 0; t < 2; ++t) {
+      // The face holding vertex (1, 0, 0) is the first one: left half, red.
+      bool first = false;
+      for (int k = 0; k < 3; ++k) {
+        first = first || mesh.vertices[mesh.triangles[t][k]].isApprox(Eigen::Vector3f(1, 0, 0));
+      }
+      const cv::Vec3f c = SurfaceColour(mesh, t, {1 / 3.f, 1 / 3.f, 1 / 3.f});
+      EXPECT_TRUE(first ? IsRed(c) : IsBlue(c)) << "triangle " << t << " " << c;
+    }
+  }
+  // A face whose texcoord list does not have u, v per corner.
+  std::string bad = SeamPly("ascii");
+  bad.replace(bad.find("6 0.5 0 1 1 0.5 1"), 17, "4 0.5 0 1 1");
+  const std::string bad_path = Write("bad_texcoords.ply", bad);
+  ExpectThrowsMentioning([&] { LoadMesh(bad_path); }, {bad_path, "texcoord"});
+  // Several textures per PLY are refused rather than shown wrongly.
+  std::string several = SeamPly("ascii");
+  several.replace(several.rfind(" 0\n"), 3, " 1\n");
+  const std::string several_path = Write("several.ply", several);
+  ExpectThrowsMentioning([&] { LoadMesh(several_path); }, {several_path, "several textures"});
 }
 
 TEST_F(MeshIoTest, PlyMissingTextureNamesBothFiles) {
