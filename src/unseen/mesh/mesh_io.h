@@ -19,7 +19,8 @@ namespace unseen {
 // embedded) loaded with their uvs in the OBJ convention (glTF's are converted); vertex
 // colours kept. The object frame is the file's coordinates (no up-axis rotation), except
 // that a Collada <unit> is applied by assimp. A BOP-style PLY's `comment TextureFile`
-// textures its per-vertex texture_u/texture_v (or s/t). `<stem>_projectors.json` beside
+// textures its per-vertex texture_u/texture_v (or s/t), or MeshLab-style per-face
+// `texcoord` lists (one texture only). `<stem>_projectors.json` beside
 // the file (see SaveMesh) is read into Mesh::projectors.
 Mesh LoadMesh(const std::string& path, double scale_to_metres = 1.0);
 
