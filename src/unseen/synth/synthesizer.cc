@@ -190,7 +190,6 @@ void DropDepthHoles(double fraction, std::mt19937& rng, cv::Mat* depth) {
 }
 
 // Layer ids in the composited id buffer.
-constexpr uint8_t kIdNone = 0;
 constexpr uint8_t kIdBackground = 1;
 constexpr uint8_t kIdObject = 2;
 constexpr uint8_t kIdFirstOccluder = 3;
@@ -237,6 +236,16 @@ Synthesizer::Synthesizer(Scene scene) : scene_(std::move(scene)) {
       break;
   }
   background_mesh_ = MakeBackgroundMesh(scene_.rig, scene_.background, texture);
+  // The background and the cameras do not move: render it once per camera.
+  RenderOptions flat;
+  flat.cull_back_faces = false;
+  RenderBuffers buffers;
+  for (const RigCamera& cam : scene_.rig.cameras) {
+    const PinholeCamera ss = Supersampled(cam.intrinsics, scene_.sensor.antialias);
+    Render(background_mesh_, ss, cam.cam_from_world(), ss.ImageRect(), flat, &buffers);
+    background_color_.push_back(buffers.color.clone());
+    background_depth_.push_back(buffers.depth.clone());
+  }
 
   const double duration_s = (num_frames_ - 1) / scene_.fps;
   for (size_t i = 0; i < scene_.occluders.size(); ++i) {
@@ -285,19 +294,16 @@ void Synthesizer::RenderCamera(int camera, int frame_id, SynthFrame* out) const 
   const Lighting lighting = LightsInCamera(scene_.lighting, cam_from_world, t);
   const ShadingOptions shading;
 
-  cv::Mat color(ss.height, ss.width, CV_32FC3, cv::Scalar::all(0.0));
-  cv::Mat depth(ss.height, ss.width, CV_32FC1, cv::Scalar(0.0));
-  cv::Mat ids(ss.height, ss.width, CV_8UC1, cv::Scalar(kIdNone));
+  // Start from the background (unlit: a photo or a wall as it appears).
+  cv::Mat color = background_color_[camera].clone();
+  cv::Mat depth = background_depth_[camera].clone();
+  cv::Mat ids(ss.height, ss.width, CV_8UC1, cv::Scalar(kIdBackground));
 
   RenderOptions flat;
   flat.cull_back_faces = false;
   RenderOptions shaded = flat;
   shaded.cull_back_faces = true;
   RenderBuffers buffers;
-
-  // Background: unlit (a photo or a wall as it appears).
-  Render(background_mesh_, ss, cam_from_world, ss.ImageRect(), flat, &buffers);
-  Composite(buffers, kIdBackground, &color, &depth, &ids);
 
   // A mesh at a pose, restricted to the rectangle of its bounding sphere.
   auto render_mesh = [&](const Mesh& mesh, const Rigid3d& cam_from_obj, bool lit, uint8_t id) {

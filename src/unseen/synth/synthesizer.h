@@ -61,6 +61,9 @@ class Synthesizer {
   int num_frames_ = 0;
   Mesh object_mesh_;
   Mesh background_mesh_;
+  // Per camera, the static background at the supersampled resolution (colour CV_32FC3,
+  // depth CV_32FC1), rendered once.
+  std::vector<cv::Mat> background_color_, background_depth_;
   std::vector<Mesh> occluder_meshes_;
   std::vector<std::shared_ptr<const Trajectory>> occluder_trajectories_;
 };
