@@ -18,6 +18,12 @@ void PreprocessOptions::Check() const {
                "preprocess.linf_epsilon {} must be in (0, 10)", linf_epsilon);
   UNSEEN_CHECK(blur_sigma_px > 0.0 && blur_sigma_px <= 10.0,
                "preprocess.blur_sigma_px {} must be in (0, 10]", blur_sigma_px);
+  UNSEEN_CHECK(shading_sigma_px > 0.0 && std::isfinite(shading_sigma_px),
+               "preprocess.shading_sigma_px {} must be > 0", shading_sigma_px);
+}
+
+double PreprocessOptions::ShadingSigmaAtLevel(int level) const {
+  return std::max(shading_sigma_px / double(1 << level), min_linf_sigma_px);
 }
 
 double PreprocessOptions::LinfSigmaAtLevel(int level) const {

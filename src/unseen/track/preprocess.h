@@ -13,11 +13,18 @@ struct PreprocessOptions {
   bool use_linf = true;          // LINF (4.11) before blurring
   // Standard deviation of LINF's wide Gaussian at pyramid level 0, pixels; divided by 2^level
   // at coarser levels (never below min_linf_sigma_px) so it covers the same part of the scene.
-  double linf_sigma_px = 16.0;
+  double linf_sigma_px = 8.0;
   double min_linf_sigma_px = 4.0;
   double linf_epsilon = 0.05;    // eps_n of (4.11), intensity in [0, 1]
   double blur_sigma_px = 1.8;    // Gaussian blur, pixels of the level being processed [4.1.3]
+  // Beyond the thesis: give the rendered object the input's low-frequency shading before
+  // it is pasted (ratio of input to render low-passed over the object's pixels only, per
+  // channel). LINF cannot equalise the silhouette's contrast, whose two sides are lit
+  // differently; unequal contrast there biases the flow by a fraction of a pixel.
+  bool shading_transfer = true;
+  double shading_sigma_px = 8.0;  // at level 0, divided by 2^level (at least min_linf_sigma_px)
   void Check() const;
+  double ShadingSigmaAtLevel(int level) const;
   // LINF sigma at pyramid `level`, pixels of that level.
   double LinfSigmaAtLevel(int level) const;
 };

@@ -191,8 +191,40 @@ TrackResult Tracker::Align(const std::vector<cv::Mat>& images, const Rigid3d& wo
   return r;
 }
 
-bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, CameraWork* work,
-                            StageTimes* times) {
+void Tracker::TransferShading(int level, CameraWork* work) const {
+  CameraWork& w = *work;
+  // Low-pass of input and render over the fully covered pixels only (so the background
+  // does not leak in); their ratio is the shading the model lacks.
+  cv::Mat full;
+  cv::compare(w.coverage, 4, full, cv::CMP_EQ);
+  cv::Mat weight;
+  full.convertTo(weight, CV_32F, 1.0 / 255.0);
+  cv::Mat weight3;
+  cv::merge(std::vector<cv::Mat>{weight, weight, weight}, weight3);
+  const double sigma = options_.preprocess.ShadingSigmaAtLevel(level);
+  const cv::Mat real = WideLowPass(w.input_roi.mul(weight3), sigma);
+  const cv::Mat model = WideLowPass(w.composite.mul(weight3), sigma);
+  const cv::Mat support = WideLowPass(weight, sigma);
+  const int width = w.composite.cols;
+  for (int y = 0; y < w.composite.rows; ++y) {
+    const uint8_t* cov = w.coverage.ptr<uint8_t>(y);
+    const float* r = real.ptr<float>(y);
+    const float* m = model.ptr<float>(y);
+    const float* sup = support.ptr<float>(y);
+    float* out = w.composite.ptr<float>(y);
+    for (int x = 0; x < width; ++x) {
+      if (!cov[x] || sup[x] < 0.05f) continue;
+      for (int k = 0; k < 3; ++k) {
+        const float den = m[3 * x + k];
+        const float gain = den > 0.01f * sup[x] ? std::clamp(r[3 * x + k] / den, 0.2f, 5.0f) : 1.0f;
+        out[3 * x + k] *= gain;
+      }
+    }
+  }
+}
+
+bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int level,
+                            CameraWork* work, StageTimes* times) {
   CameraWork& w = *work;
   const RenderOptions render_options;
   Timer timer;
@@ -207,6 +239,12 @@ bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, Camer
     w.render.color.copyTo(w.composite, w.render.mask);
     w.mask = w.render.mask;
     w.depth = w.render.depth;
+    if (options_.preprocess.shading_transfer) {
+      w.coverage.create(height, width, CV_8UC1);
+      w.coverage.setTo(0);
+      w.coverage.setTo(4, w.mask);
+      TransferShading(level, &w);
+    }
     times->preprocess_ms += timer.ElapsedMilliseconds();
     return true;
   }
@@ -253,6 +291,7 @@ bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, Camer
       }
     }
   }
+  if (options_.preprocess.shading_transfer) TransferShading(level, &w);
   for (int y = 0; y < height; ++y) {
     const uint8_t* cov = w.coverage.ptr<uint8_t>(y);
     float* out = w.composite.ptr<float>(y);
@@ -326,7 +365,7 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
         equations[c].Clear();
         if (!w.active) continue;
         const Rigid3d cam_from_obj = cam_from_world_[c] * pose;
-        if (!RenderVirtual(cam_from_obj, level < po.supersampled_levels, &w, &s.times)) continue;
+        if (!RenderVirtual(cam_from_obj, level < po.supersampled_levels, level, &w, &s.times)) continue;
         timer.Restart();
         Preprocess(w.composite, options_.preprocess, level, true, &w.virtual_pre);
         s.times.preprocess_ms += timer.ElapsedMilliseconds();

@@ -103,8 +103,11 @@ class Tracker {
   double Confidence(const SolveSummary& summary) const;
   // Renders the model into `work`'s region at `cam_from_obj` and composes the virtual image
   // (input with the render over it), its mask and depth; false when nothing was rendered.
-  bool RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, CameraWork* work,
+  bool RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int level, CameraWork* work,
                      StageTimes* times);
+  // Multiplies the rendered colour of `work`'s virtual image by the low-frequency ratio of
+  // input to render over the object's pixels (PreprocessOptions::shading_transfer).
+  void TransferShading(int level, CameraWork* work) const;
   // Image motion (pixels at `level`, largest over cameras) of the object under `twist`.
   double UpdatePixels(const Rigid3d& world_from_obj, const Vector6d& twist, int level) const;
 

@@ -3,7 +3,7 @@
 // Every setting of the 6-DoF tracker (SPEC 3) in one struct, with the thesis's values as
 // defaults, validated once by Check() and loadable from YAML:
 //
-//   preprocess: {use_linf: true, linf_sigma_px: 16, linf_epsilon: 0.05, blur_sigma_px: 1.8}
+//   preprocess: {use_linf: true, linf_sigma_px: 8, linf_epsilon: 0.05, blur_sigma_px: 1.8}
 //   selection:  {color_mode: redundancy, min_gradient_sq: 984e-6, max_normal_flow_px: 1.22,
 //                use_occlusion_rejection: true, ...}
 //   solver:     {kernel: huber, kernel_width: 1.345, irls_iterations: 2}

@@ -5,6 +5,7 @@
 #include "unseen/track/tracker.h"
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -122,6 +123,216 @@ TEST_F(TrackerScene, StartingAtTheTruthStaysThere) {
     EXPECT_EQ(r.summary.num_levels, levels);
   }
   EXPECT_EQ(tracker.NumLevelsFor(truth_), 3);  // ~140 px across, >= 32 px at the coarsest
+}
+
+// Multiplies the image by a gain and a smooth horizontal shading ramp.
+cv::Mat Shade(const cv::Mat& image) {
+  cv::Mat out = image.clone();
+  for (int y = 0; y < out.rows; ++y) {
+    for (int x = 0; x < out.cols; ++x) {
+      out.at<cv::Vec3f>(y, x) *= float(0.55 * (0.6 + 0.8 * x / double(out.cols)));
+    }
+  }
+  return out;
+}
+
+TEST_F(TrackerScene, LinfMakesTheSolveInvariantToGainAndShading) {
+  const cv::Mat shaded = Shade(image_);
+  Vector6d d;
+  d << 0.004, -0.003, 0.01, 2 * kDeg, -2 * kDeg, 1 * kDeg;
+  const Rigid3d start = Perturb(truth_, d);
+  TrackerOptions with;
+  with.preprocess.shading_transfer = false;  // LINF alone
+  TrackerOptions without = with;
+  without.preprocess.use_linf = false;
+  Tracker linf(rig_, cube_, with);
+  Tracker plain(rig_, cube_, without);
+  const Rigid3d a = linf.Align({image_}, start).world_from_obj;
+  const Rigid3d b = linf.Align({shaded}, start).world_from_obj;
+  const Rigid3d c = plain.Align({shaded}, start).world_from_obj;
+  const PoseDifference linf_change = Difference(a, b);
+  EXPECT_LT(linf_change.translation, 0.001);
+  EXPECT_LT(linf_change.rotation_rad, 0.3 * kDeg);
+  EXPECT_LT(Difference(b, truth_).translation, 0.0015);
+  // Without LINF the same shading moves the solution much further.
+  EXPECT_GT(Difference(c, truth_).translation, 2.0 * Difference(b, truth_).translation);
+}
+
+TEST_F(TrackerScene, ConvergenceBasinGrowsWithPyramidLevels) {
+  Tracker tracker(rig_, cube_);
+  int converged[2] = {0, 0};
+  const int level_counts[2] = {1, 3};
+  for (int i = 0; i < 2; ++i) {
+    for (double offset_mm : {6.0, 10.0, 14.0, 18.0, 24.0}) {
+      for (int axis : {0, 1}) {
+        Vector6d d = Vector6d::Zero();
+        d(axis) = offset_mm * 1e-3;
+        const TrackResult r = tracker.Align({image_}, Perturb(truth_, d), level_counts[i]);
+        if (Difference(r.world_from_obj, truth_).translation < 0.002) ++converged[i];
+      }
+    }
+  }
+  EXPECT_GT(converged[1], converged[0]);
+  EXPECT_GE(converged[1], 6);  // three levels bring back offsets of ~15-20 mm (~15 px)
+}
+
+TEST_F(TrackerScene, OcclusionRejectionKeepsTheTrackUnderAnOccluder) {
+  cv::Mat occluded = image_.clone();
+  // A white bar across the middle of the cube.
+  const Eigen::Vector2d centre = rig_.cameras[0].intrinsics.Project(truth_.translation());
+  occluded(cv::Rect(int(centre.x()) - 12, 0, 24, occluded.rows)).setTo(cv::Scalar::all(1.0));
+  Vector6d d;
+  d << 0.004, 0.003, 0.01, 2 * kDeg, 1 * kDeg, -2 * kDeg;
+  TrackerOptions off;
+  off.selection.use_occlusion_rejection = false;
+  Tracker with(rig_, cube_);
+  Tracker without(rig_, cube_, off);
+  const TrackResult a = with.Align({occluded}, Perturb(truth_, d));
+  const TrackResult b = without.Align({occluded}, Perturb(truth_, d));
+  EXPECT_GT(a.summary.counts.rejected_input_gradient, 100);
+  EXPECT_LT(Difference(a.world_from_obj, truth_).translation, 0.002) << a.BriefReport();
+  EXPECT_LT(Difference(a.world_from_obj, truth_).translation,
+            Difference(b.world_from_obj, truth_).translation)
+      << b.BriefReport();
+}
+
+TEST(TrackerMultiCamera, TwoCamerasBeatOneOnDepth) {
+  // Two cameras 0.6 m apart verging on the object; noisy images.
+  Rig rig;
+  rig.cameras.push_back({"left", Camera512(), Rigid3d()});
+  const Eigen::Vector3d target(0.0, 0.0, 1.0);
+  const Eigen::Vector3d right_centre(0.6, 0.0, 0.0);
+  const Rigid3d right_pose(ExpSO3(Eigen::Vector3d(0, -std::atan2(0.6, 1.0), 0)), right_centre);
+  rig.cameras.push_back({"right", Camera512(), right_pose});
+  const Mesh cube = MakeLetteredCube(0.096, 128);
+  const Rigid3d truth(ExpSO3(Eigen::Vector3d(0.3, 0.9, 0.2)), target);
+  std::vector<cv::Mat> images;
+  cv::RNG rng(4);
+  for (int c = 0; c < 2; ++c) {
+    cv::Mat im = Synthesize(cube, rig.cameras[c], truth, Background(Camera512(), 10 + c));
+    cv::Mat noise(im.size(), im.type());
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, 0.03);
+    images.push_back(im + noise);
+  }
+  Vector6d d;
+  d << 0.003, -0.002, 0.03, 1 * kDeg, 2 * kDeg, -1 * kDeg;
+  const Rigid3d start = Perturb(truth, d);
+  Tracker both(rig, cube);
+  Rig left_only;
+  left_only.cameras.push_back(rig.cameras[0]);
+  Tracker one(left_only, cube);
+  double depth_error_both = 0, depth_error_one = 0;
+  const TrackResult rb = both.Align(images, start);
+  const TrackResult ro = one.Align({images[0]}, start);
+  depth_error_both = std::abs(rb.world_from_obj.translation().z() - truth.translation().z());
+  depth_error_one = std::abs(ro.world_from_obj.translation().z() - truth.translation().z());
+  EXPECT_LT(Difference(rb.world_from_obj, truth).translation, 0.002) << rb.BriefReport();
+  EXPECT_LT(depth_error_both, depth_error_one) << rb.BriefReport() << "\n" << ro.BriefReport();
+}
+
+TEST_F(TrackerScene, ObjectLeavingTheViewIsReportedLost) {
+  Tracker tracker(rig_, cube_);
+  tracker.Initialize(truth_);
+  const cv::Mat background = Background(rig_.cameras[0].intrinsics, 1);
+  bool lost = false;
+  int tracked_frames = 0;
+  for (int k = 0; k < 40 && !lost; ++k) {
+    // Moves right by 15 mm a frame: out of the image (x > ~0.35 m) after ~20 frames.
+    const Rigid3d pose(truth_.rotation(),
+                       truth_.translation() + Eigen::Vector3d(0.015 * k, 0.0, 0.0));
+    const bool visible = pose.translation().x() < 0.2;
+    const cv::Mat image = Synthesize(cube_, rig_.cameras[0], pose, background);
+    const TrackResult r = tracker.Track({image});
+    ASSERT_TRUE(r.world_from_obj.IsValid());
+    ASSERT_GE(r.confidence, 0.0);
+    ASSERT_LE(r.confidence, 1.0);
+    if (visible) {
+      EXPECT_EQ(r.status, TrackStatus::kTracking) << "frame " << k << ": " << r.BriefReport();
+      EXPECT_LT(Difference(r.world_from_obj, pose).translation, 0.003) << r.BriefReport();
+      ++tracked_frames;
+    }
+    if (r.status == TrackStatus::kLost) {
+      lost = true;
+      EXPECT_FALSE(visible) << "lost while fully visible at frame " << k;
+    } else if (pose.translation().x() > 0.45) {
+      // Entirely out of view: a tracking status must not come with a confident pose.
+      EXPECT_LT(r.confidence, 0.3) << r.BriefReport();
+    }
+  }
+  EXPECT_TRUE(lost);
+  EXPECT_GT(tracked_frames, 10);
+  // A pose hint brings it back.
+  tracker.Reset(truth_);
+  const TrackResult r = tracker.Track({image_});
+  EXPECT_EQ(r.status, TrackStatus::kTracking);
+  EXPECT_LT(Difference(r.world_from_obj, truth_).translation, 0.001);
+}
+
+TEST_F(TrackerScene, ReacquiresAfterALossBySearchingAroundTheLastPose) {
+  Tracker tracker(rig_, cube_);
+  tracker.Initialize(truth_);
+  const cv::Mat empty = Background(rig_.cameras[0].intrinsics, 1);
+  TrackResult r;
+  for (int k = 0; k < 4; ++k) r = tracker.Track({empty});  // the object vanishes
+  EXPECT_EQ(r.status, TrackStatus::kLost);
+  // It reappears 25 mm from where it was lost.
+  const Rigid3d moved(truth_.rotation(), truth_.translation() + Eigen::Vector3d(0.025, 0.0, 0.0));
+  const cv::Mat image = Synthesize(cube_, rig_.cameras[0], moved, empty);
+  for (int k = 0; k < 3 && r.status == TrackStatus::kLost; ++k) r = tracker.Track({image});
+  EXPECT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
+  EXPECT_LT(Difference(r.world_from_obj, moved).translation, 0.002) << r.BriefReport();
+}
+
+TEST_F(TrackerScene, BadInputThrows) {
+  Tracker tracker(rig_, cube_);
+  EXPECT_THROW(tracker.Track({image_}), Error);  // not initialised
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(tracker.Initialize(Rigid3d(Eigen::Quaterniond::Identity(),
+                                          Eigen::Vector3d(nan, 0, 1))),
+               Error);
+  tracker.Initialize(truth_);
+  EXPECT_THROW(tracker.Track({}), Error);                    // wrong camera count
+  EXPECT_THROW(tracker.Track({image_, image_}), Error);      // wrong camera count
+  cv::Mat small;
+  cv::resize(image_, small, cv::Size(256, 128));
+  EXPECT_THROW(tracker.Track({small}), Error);               // wrong size
+  EXPECT_THROW(tracker.Track({cv::Mat(256, 512, CV_32FC1)}), Error);  // wrong type
+  cv::Mat bytes;
+  image_.convertTo(bytes, CV_8UC3, 255.0);
+  EXPECT_NO_THROW(tracker.Track({bytes}));                   // 8-bit is converted
+  EXPECT_THROW(Tracker(rig_, Mesh()), Error);                 // empty model
+  TrackerOptions bad;
+  bad.pyramid.max_levels = 0;
+  EXPECT_THROW(Tracker(rig_, cube_, bad), Error);
+}
+
+TEST_F(TrackerScene, UntexturedModelTracksFromMaterialColour) {
+  Mesh plain = cube_;
+  for (Material& m : plain.materials) {
+    m.texture = cv::Mat();
+    m.texture_path.clear();
+    m.diffuse_bgr = Eigen::Vector3f(0.2f, 0.3f, 0.8f);
+  }
+  plain.uvs.clear();
+  const cv::Mat image =
+      Synthesize(plain, rig_.cameras[0], truth_, Background(rig_.cameras[0].intrinsics, 1));
+  Tracker tracker(rig_, plain);
+  Vector6d d;
+  d << 0.004, -0.003, 0.0, 0.0, 0.0, 0.0;
+  const TrackResult r = tracker.Align({image}, Perturb(truth_, d));
+  EXPECT_LT(Difference(r.world_from_obj, truth_).translation, 0.003) << r.BriefReport();
+}
+
+TEST_F(TrackerScene, ModelCanBeSwappedBetweenFrames) {
+  Tracker tracker(rig_, cube_);
+  tracker.Initialize(truth_);
+  tracker.Track({image_});
+  Mesh bigger = cube_;
+  bigger.Scale(1.5f);
+  tracker.SetModel(bigger);
+  EXPECT_NEAR(tracker.model().vertices[0].norm(), 1.5f * cube_.vertices[0].norm(), 1e-6);
+  const TrackResult r = tracker.Track({image_});
+  EXPECT_TRUE(r.world_from_obj.IsValid());
 }
 
 }  // namespace

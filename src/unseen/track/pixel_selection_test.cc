@@ -1,0 +1,151 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/track/pixel_selection.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+PinholeCamera Camera(int w, int h) {
+  PinholeCamera cam;
+  cam.width = w;
+  cam.height = h;
+  cam.fx = cam.fy = 800.0;
+  cam.cx = w / 2.0;
+  cam.cy = h / 2.0;
+  return cam;
+}
+
+struct Scene {
+  cv::Mat virtual_image, input_image;
+  cv::Mat region, depth;
+};
+
+SelectionCounts Select(const Scene& scene, const PixelSelectionOptions& options,
+                       const PreprocessOptions& pre, const cv::Mat& region) {
+  PreprocessedImage v, i;
+  Preprocess(scene.virtual_image, pre, 0, true, &v);
+  Preprocess(scene.input_image, pre, 0, true, &i);
+  SelectionInput in;
+  in.virtual_image = &v;
+  in.input_image = &i;
+  in.region = &region;
+  in.depth = &scene.depth;
+  in.roi = {0, 0, scene.virtual_image.cols, scene.virtual_image.rows};
+  in.camera = Camera(scene.virtual_image.cols, scene.virtual_image.rows);
+  in.origin_in_cam = Eigen::Vector3d(0, 0, 1.0);
+  FlowEquations eq;
+  SelectionCounts counts;
+  SelectPixels(in, options, &eq, &counts);
+  EXPECT_EQ(eq.size(), counts.equations);
+  return counts;
+}
+
+// A vertical edge between two colours at column `edge_x` (sub-pixel, anti-aliased).
+cv::Mat EdgeImage(int w, int h, double edge_x, const cv::Vec3f& left, const cv::Vec3f& right) {
+  cv::Mat image(h, w, CV_32FC3);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const double t = std::clamp(x + 0.5 - edge_x, 0.0, 1.0);  // share of the pixel right of the edge
+      image.at<cv::Vec3f>(y, x) = left * float(1 - t) + right * float(t);
+    }
+  }
+  return image;
+}
+
+TEST(PixelSelection, ColourGradientRedundancyKeepsIsoluminantEdgesThatGreyLoses) {
+  // Two colours of equal luminance (BT.601 weights in BGR order).
+  const cv::Vec3f a(0.2f, 0.5f, 0.5f);
+  const float lum_a = 0.114f * a[0] + 0.587f * a[1] + 0.299f * a[2];
+  const float b_blue = 0.7f, b_green = 0.35f;
+  const cv::Vec3f b(b_blue, b_green, (lum_a - 0.114f * b_blue - 0.587f * b_green) / 0.299f);
+  Scene scene;
+  scene.virtual_image = EdgeImage(64, 48, 32.0, a, b);
+  scene.input_image = EdgeImage(64, 48, 32.5, a, b);
+  scene.depth = cv::Mat(48, 64, CV_32FC1, cv::Scalar(1.0f));
+  cv::Mat region(48, 64, CV_8UC1, cv::Scalar(0));
+  region(cv::Rect(8, 8, 48, 32)).setTo(255);
+  PreprocessOptions pre;
+  pre.use_linf = false;
+  PixelSelectionOptions options;
+  options.color_mode = ColorMode::kColorGradientRedundancy;
+  const SelectionCounts redundancy = Select(scene, options, pre, region);
+  options.color_mode = ColorMode::kGrey;
+  const SelectionCounts grey = Select(scene, options, pre, region);
+  options.color_mode = ColorMode::kRawColor;
+  const SelectionCounts raw = Select(scene, options, pre, region);
+  EXPECT_GT(redundancy.used, 32 * 4);  // a band of several columns along the edge
+  EXPECT_EQ(grey.used, 0);
+  EXPECT_EQ(grey.rejected_gradient, grey.candidates);
+  EXPECT_GT(raw.used, 32 * 2);
+  EXPECT_GE(raw.equations, raw.used);  // up to three equations a pixel
+  EXPECT_EQ(raw.candidates, redundancy.candidates);
+}
+
+TEST(PixelSelection, OcclusionRejectionRemovesAnOccludersPixels) {
+  cv::RNG rng(11);
+  cv::Mat small(12, 16, CV_32FC3);
+  rng.fill(small, cv::RNG::UNIFORM, 0.1, 0.9);
+  Scene scene;
+  cv::resize(small, scene.virtual_image, cv::Size(128, 96), 0, 0, cv::INTER_CUBIC);
+  // The input: the same texture moved by half a pixel, with a white bar in front.
+  const cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, 0.5, 0, 1, 0);
+  cv::warpAffine(scene.virtual_image, scene.input_image, shift, scene.virtual_image.size(),
+                 cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  const cv::Rect bar(50, 0, 20, 96);
+  scene.input_image(bar).setTo(cv::Scalar::all(1.0));
+  scene.depth = cv::Mat(96, 128, CV_32FC1, cv::Scalar(1.0f));
+  cv::Mat occluded(96, 128, CV_8UC1, cv::Scalar(0));
+  occluded(cv::Rect(bar.x + 3, 4, bar.width - 6, 88)).setTo(255);  // bar without its edges
+  cv::Mat free(96, 128, CV_8UC1, cv::Scalar(0));
+  free(cv::Rect(6, 4, 36, 88)).setTo(255);
+  free(cv::Rect(80, 4, 42, 88)).setTo(255);
+
+  PreprocessOptions pre;
+  PixelSelectionOptions on;
+  PixelSelectionOptions off;
+  off.use_occlusion_rejection = false;
+  const SelectionCounts occ_on = Select(scene, on, pre, occluded);
+  const SelectionCounts occ_off = Select(scene, off, pre, occluded);
+  const SelectionCounts free_on = Select(scene, on, pre, free);
+  const SelectionCounts free_off = Select(scene, off, pre, free);
+  ASSERT_GT(occ_off.used, 200);
+  EXPECT_LT(occ_on.used, occ_off.used / 20);
+  EXPECT_GT(occ_on.rejected_input_gradient, occ_off.used / 2);
+  EXPECT_GT(free_on.used, 0.85 * free_off.used);
+}
+
+TEST(PixelSelection, NormalFlowBoundRejectsLargeMotion) {
+  const cv::Vec3f dark(0.2f, 0.2f, 0.2f), bright(0.8f, 0.8f, 0.8f);
+  Scene scene;
+  scene.virtual_image = EdgeImage(64, 48, 30.0, dark, bright);
+  scene.input_image = EdgeImage(64, 48, 36.0, dark, bright);  // 6 px away
+  scene.depth = cv::Mat(48, 64, CV_32FC1, cv::Scalar(1.0f));
+  cv::Mat region(48, 64, CV_8UC1, cv::Scalar(0));
+  region(cv::Rect(8, 8, 48, 32)).setTo(255);
+  PreprocessOptions pre;
+  pre.use_linf = false;
+  PixelSelectionOptions options;
+  options.use_occlusion_rejection = false;
+  const SelectionCounts bounded = Select(scene, options, pre, region);
+  options.use_normal_flow_bound = false;
+  const SelectionCounts unbounded = Select(scene, options, pre, region);
+  EXPECT_GT(bounded.rejected_normal_flow, 0);
+  EXPECT_LT(bounded.used, unbounded.used);
+}
+
+TEST(PixelSelection, OptionsAndNames) {
+  PixelSelectionOptions o;
+  EXPECT_NO_THROW(o.Check());
+  o.max_normal_flow_px = 0;
+  EXPECT_THROW(o.Check(), Error);
+  EXPECT_EQ(ParseColorMode("grey"), ColorMode::kGrey);
+  EXPECT_EQ(ParseColorMode(ToString(ColorMode::kRawColor)), ColorMode::kRawColor);
+  EXPECT_THROW(ParseColorMode("hsv"), Error);
+}
+
+}  // namespace
+}  // namespace unseen

@@ -1,0 +1,76 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/track/tracker_options.h"
+
+#include <cstdio>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+TEST(TrackerOptions, DefaultsAreTheThesisValues) {
+  const TrackerOptions o;
+  EXPECT_NO_THROW(o.Check());
+  EXPECT_DOUBLE_EQ(o.preprocess.blur_sigma_px, 1.8);
+  EXPECT_DOUBLE_EQ(o.selection.max_normal_flow_px, 1.22);
+  EXPECT_DOUBLE_EQ(o.selection.min_gradient_sq, 984e-6);
+  EXPECT_DOUBLE_EQ(o.selection.occlusion_min_gradient_sq, 98.4e-6);
+  EXPECT_DOUBLE_EQ(o.selection.occlusion_max_angle_rad, 0.90);
+  EXPECT_DOUBLE_EQ(o.selection.occlusion_max_magnitude_diff, 39.2e-3);
+  EXPECT_EQ(o.selection.color_mode, ColorMode::kColorGradientRedundancy);
+}
+
+TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
+  const TrackerOptions o = ParseTrackerOptions(
+      "preprocess: {use_linf: false, blur_sigma_px: 2.5}\n"
+      "selection: {color_mode: raw, use_occlusion_rejection: false}\n"
+      "solver: {kernel: tukey, kernel_width: 4.685}\n"
+      "pyramid: {max_levels: 2}\n"
+      "predictor: {type: none}\n"
+      "failure: {lost_after_frames: 5}\n"
+      "frame_interval_s: 0.04\n");
+  EXPECT_FALSE(o.preprocess.use_linf);
+  EXPECT_DOUBLE_EQ(o.preprocess.blur_sigma_px, 2.5);
+  EXPECT_EQ(o.selection.color_mode, ColorMode::kRawColor);
+  EXPECT_FALSE(o.selection.use_occlusion_rejection);
+  EXPECT_EQ(o.solver.kernel, RobustKernel::kTukey);
+  EXPECT_EQ(o.pyramid.max_levels, 2);
+  EXPECT_EQ(o.predictor.type, PredictorType::kHold);
+  EXPECT_EQ(o.failure.lost_after_frames, 5);
+  EXPECT_DOUBLE_EQ(o.frame_interval_s, 0.04);
+  EXPECT_DOUBLE_EQ(o.selection.max_normal_flow_px, 1.22);  // untouched default
+}
+
+TEST(TrackerOptions, RejectsBadFilesNamingTheKey) {
+  auto message = [](const std::string& yaml) {
+    try {
+      ParseTrackerOptions(yaml, "t.yaml");
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(message("pyramid: {max_levles: 2}").find("max_levles"), std::string::npos);
+  EXPECT_NE(message("colour: {}").find("colour"), std::string::npos);
+  EXPECT_NE(message("pyramid: {max_levels: two}").find("pyramid.max_levels"), std::string::npos);
+  EXPECT_NE(message("pyramid: {max_levels: 0}").find("max_levels"), std::string::npos);
+  EXPECT_NE(message("selection: {color_mode: hsv}").find("hsv"), std::string::npos);
+  EXPECT_NE(message("a: [").find("t.yaml"), std::string::npos);
+  EXPECT_THROW(LoadTrackerOptions("/nonexistent/tracker.yaml"), Error);
+}
+
+TEST(TrackerOptions, LoadsAFile) {
+  const std::string path = ::testing::TempDir() + "/tracker_options_test.yaml";
+  {
+    std::ofstream out(path);
+    out << "solver:\n  irls_iterations: 4\n";
+  }
+  EXPECT_EQ(LoadTrackerOptions(path).solver.irls_iterations, 4);
+  std::remove(path.c_str());
+}
+
+}  // namespace
+}  // namespace unseen

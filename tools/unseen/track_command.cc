@@ -1,0 +1,221 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// `unseen track SEQ --init gt|POSE`: tracks the sequence's object (or --model) through every
+// frame with the 6-DoF tracker, writes the pose stream, a statistics JSON and optionally an
+// overlay video, and prints a summary (fps, lost frames, error against ground truth).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tools/unseen/commands.h"
+#include "unseen/eval/overlay.h"
+#include "unseen/io/pose_stream.h"
+#include "unseen/io/sequence.h"
+#include "unseen/mesh/mesh_io.h"
+#include "unseen/track/tracker.h"
+#include "unseen/util/error.h"
+#include "unseen/util/logging.h"
+#include "unseen/util/timer.h"
+
+namespace unseen::cli {
+namespace {
+
+struct TrackArgs {
+  std::string sequence;
+  std::string model;
+  std::string model_units = "mm";
+  double model_scale = 1.0;
+  std::string init;
+  std::string config;
+  std::string cameras;
+  std::string out;
+  std::string stats;
+  std::string overlay;
+  int max_frames = 0;
+};
+
+std::vector<std::string> SplitComma(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+// "tx,ty,tz,qx,qy,qz,qw" (metres, world frame).
+Rigid3d ParsePose(const std::string& text) {
+  const std::vector<std::string> parts = SplitComma(text);
+  UNSEEN_CHECK(parts.size() == 7,
+               "track: --init '{}' must be 'gt' or seven numbers tx,ty,tz,qx,qy,qz,qw", text);
+  double v[7];
+  for (int i = 0; i < 7; ++i) {
+    try {
+      size_t used = 0;
+      v[i] = std::stod(parts[i], &used);
+      UNSEEN_CHECK(used == parts[i].size(), "trailing characters");
+    } catch (const std::exception&) {
+      ThrowError("track: --init value {} '{}' is not a number", i + 1, parts[i]);
+    }
+    UNSEEN_CHECK(std::isfinite(v[i]), "track: --init value {} '{}' is not finite", i + 1,
+                 parts[i]);
+  }
+  const Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
+  UNSEEN_CHECK(q.norm() > 1e-6, "track: --init quaternion ({}, {}, {}, {}) is zero", v[3], v[4],
+               v[5], v[6]);
+  return Rigid3d(q, Eigen::Vector3d(v[0], v[1], v[2]));
+}
+
+void RunTrack(const TrackArgs& args) {
+  namespace fs = std::filesystem;
+  UNSEEN_CHECK(fs::exists(args.sequence), "track: sequence '{}' does not exist", args.sequence);
+  UNSEEN_CHECK(std::isfinite(args.model_scale) && args.model_scale > 0.0,
+               "track: --model-scale {} must be > 0", args.model_scale);
+  UNSEEN_CHECK(args.model_units == "mm" || args.model_units == "m",
+               "track: --model-units '{}' must be mm or m", args.model_units);
+  Sequence sequence = Sequence::Open(args.sequence);
+  const std::string reference_name = sequence.rig().cameras.at(sequence.reference_camera()).name;
+  if (!args.cameras.empty()) sequence.SelectCameras(SplitComma(args.cameras));
+  const TrackerOptions options =
+      args.config.empty() ? TrackerOptions() : LoadTrackerOptions(args.config);
+
+  Mesh model;
+  if (args.model.empty()) {
+    UNSEEN_CHECK(!sequence.model_path().empty(),
+                 "track: sequence '{}' has no model; give one with --model", args.sequence);
+    model = sequence.LoadModel();
+  } else {
+    model = LoadMesh(args.model, args.model_units == "mm" ? 0.001 : 1.0);
+  }
+  if (args.model_scale != 1.0) model.Scale(static_cast<float>(args.model_scale));
+
+  Rigid3d initial;
+  if (args.init == "gt") {
+    const std::optional<Rigid3d> gt = sequence.GroundTruth(0);
+    UNSEEN_CHECK(gt.has_value(), "track: --init gt but sequence '{}' has no ground truth for "
+                 "its first frame", args.sequence);
+    initial = *gt;
+  } else {
+    initial = ParsePose(args.init);
+  }
+
+  TrackerOptions tracker_options = options;
+  if (args.config.empty() && sequence.fps() > 0) tracker_options.frame_interval_s = 1.0 / sequence.fps();
+  Tracker tracker(sequence.rig(), std::move(model), tracker_options);
+  tracker.Initialize(initial);
+
+  std::unique_ptr<PoseStreamWriter> writer;
+  if (!args.out.empty()) writer = std::make_unique<PoseStreamWriter>(args.out);
+  const int frames = args.max_frames > 0 ? std::min(args.max_frames, sequence.num_frames())
+                                         : sequence.num_frames();
+  std::vector<PoseRecord> records;
+  StageTimes sum_times;
+  double sum_process_ms = 0.0;
+  int lost = 0, gt_frames = 0;
+  double sum_t_mm = 0, max_t_mm = 0, sum_r_deg = 0, max_r_deg = 0;
+  for (int i = 0; i < frames; ++i) {
+    const Frame frame = sequence.ReadFrame(i);
+    Timer timer;
+    const TrackResult r = tracker.Track(frame.images);
+    const double ms = timer.ElapsedMilliseconds();
+    sum_process_ms += ms;
+    sum_times += r.summary.times;
+    PoseRecord record;
+    record.frame = frame.frame_id;
+    record.time_s = frame.time_s;
+    record.status = r.status;
+    record.confidence = r.confidence;
+    record.world_from_obj = r.world_from_obj;
+    record.process_ms = ms;
+    if (writer) writer->Write(record);
+    records.push_back(record);
+    if (r.status != TrackStatus::kTracking) ++lost;
+    std::string error_text;
+    if (const std::optional<Rigid3d> gt = sequence.GroundTruth(i)) {
+      const PoseDifference d = Difference(r.world_from_obj, *gt);
+      const double t_mm = 1e3 * d.translation, r_deg = d.rotation_rad * 180.0 / M_PI;
+      sum_t_mm += t_mm;
+      sum_r_deg += r_deg;
+      max_t_mm = std::max(max_t_mm, t_mm);
+      max_r_deg = std::max(max_r_deg, r_deg);
+      ++gt_frames;
+      error_text = fmt::format(" err {:.2f} mm {:.3f} deg", t_mm, r_deg);
+    }
+    UNSEEN_LOG_DEBUG("frame {}:{} {}", frame.frame_id, error_text, r.BriefReport());
+  }
+
+  const double fps = sum_process_ms > 0 ? 1e3 * frames / sum_process_ms : 0.0;
+  const int ncam = sequence.rig().size();
+  std::printf("track %s: %d frames, %d camera(s), %.1f fps (%.3f ms/frame), %d lost\n",
+              args.sequence.c_str(), frames, ncam, fps, frames ? sum_process_ms / frames : 0.0,
+              lost);
+  const double n = std::max(frames, 1);
+  std::printf("  mean ms: predict %.3f render %.3f preprocess %.3f select %.3f solve %.3f\n",
+              sum_times.predict_ms / n, sum_times.render_ms / n, sum_times.preprocess_ms / n,
+              sum_times.select_ms / n, sum_times.solve_ms / n);
+  if (gt_frames > 0) {
+    std::printf("  error vs ground truth (%d frames): translation mean %.2f mm max %.2f mm, "
+                "rotation mean %.3f deg max %.3f deg\n",
+                gt_frames, sum_t_mm / gt_frames, max_t_mm, sum_r_deg / gt_frames, max_r_deg);
+  }
+  if (!args.stats.empty()) {
+    nlohmann::json j;
+    j["sequence"] = args.sequence;
+    j["frames"] = frames;
+    j["cameras"] = ncam;
+    j["fps"] = fps;
+    j["lost_frames"] = lost;
+    j["mean_ms"] = {{"predict", sum_times.predict_ms / n}, {"render", sum_times.render_ms / n},
+                    {"preprocess", sum_times.preprocess_ms / n},
+                    {"select", sum_times.select_ms / n}, {"solve", sum_times.solve_ms / n},
+                    {"total", sum_process_ms / n}};
+    if (gt_frames > 0) {
+      j["translation_error_mm"] = {{"mean", sum_t_mm / gt_frames}, {"max", max_t_mm}};
+      j["rotation_error_deg"] = {{"mean", sum_r_deg / gt_frames}, {"max", max_r_deg}};
+    }
+    std::ofstream out(args.stats);
+    UNSEEN_CHECK(out.good(), "track: cannot write stats file '{}'", args.stats);
+    out << j.dump(2) << "\n";
+  }
+  if (!args.overlay.empty()) {
+    int camera = sequence.rig().Find(reference_name);
+    if (camera < 0) camera = 0;
+    WriteOverlay(sequence, records, camera, args.overlay);
+  }
+}
+
+void AddTrackCommand(CLI::App& app) {
+  auto args = std::make_shared<TrackArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "track", "Track the object of a sequence in 6 DoF from an initial pose; write the poses");
+  cmd->add_option("SEQ", args->sequence, "Sequence folder")->required();
+  cmd->add_option("--model", args->model, "Model file (default: the sequence's model)");
+  cmd->add_option("--model-units", args->model_units, "Units of --model: mm (BOP) or m");
+  cmd->add_option("--model-scale", args->model_scale, "Scale the model by this factor");
+  cmd->add_option("--init", args->init,
+                  "Initial pose: 'gt' (first frame's ground truth) or tx,ty,tz,qx,qy,qz,qw "
+                  "(metres, world frame)")
+      ->required();
+  cmd->add_option("--config", args->config, "Tracker options (YAML)");
+  cmd->add_option("--cameras", args->cameras, "Comma-separated cameras to use (default: all)");
+  cmd->add_option("--out", args->out, "Pose stream to write (.csv or .jsonl)");
+  cmd->add_option("--stats", args->stats, "Statistics JSON to write (fps, mean per-stage ms)");
+  cmd->add_option("--overlay", args->overlay, "Overlay video (.mp4/.avi) or PNG folder");
+  cmd->add_option("--max-frames", args->max_frames, "Track only the first N frames");
+  cmd->callback([args] { RunTrack(*args); });
+}
+
+}  // namespace
+
+UNSEEN_REGISTER_COMMAND("track", AddTrackCommand);
+
+}  // namespace unseen::cli
