@@ -104,29 +104,32 @@ cv::Mat MakeClutterImage(int width, int height, uint64_t seed) {
   }
 
   // Boxes, posters with text, round things.
-  const int num_items = static_cast<int>(90 * s * s * 2) + 40;
+  const int num_items = static_cast<int>(100 * s * s) + 30;
   for (int i = 0; i < num_items; ++i) {
-    const int kind = d.Int(0, 5);
+    const int kind = d.Int(0, 9);
     const cv::Point p(d.Int(0, width - 1), d.Int(0, height - 1));
     const double size = d.Uniform(8, 90) * s;
     const cv::Scalar c = d.Colour();
     switch (kind) {
       case 0:
-      case 1: {
+      case 1:
+      case 2: {
         const cv::Rect r(p.x, p.y, static_cast<int>(size * d.Uniform(0.5, 2.0)),
                          static_cast<int>(size * d.Uniform(0.5, 2.0)));
         cv::rectangle(img, r, c, cv::FILLED);
-        if (d.Chance(0.5)) {
-          DrawText(img, d, {r.x + 2, r.y + r.height / 2}, d.Uniform(0.3, 1.2) * s * 2,
+        if (d.Chance(0.25)) {
+          DrawText(img, d, {r.x + 2, r.y + r.height / 2}, d.Uniform(0.3, 0.8) * s * 2,
                    d.Colour(0, 255));
         }
         break;
       }
-      case 2:
+      case 3:
+      case 4:
         cv::ellipse(img, p, cv::Size(static_cast<int>(size), static_cast<int>(size * d.Uniform(0.4, 1.0))),
                     d.Uniform(0, 180), 0, 360, c, cv::FILLED, cv::LINE_AA);
         break;
-      case 3: {  // cables
+      case 5:
+      case 6: {  // cables
         std::vector<cv::Point> pts{p};
         for (int k = 0; k < d.Int(3, 8); ++k) {
           pts.emplace_back(pts.back().x + d.Int(-int(60 * s), int(60 * s)),
@@ -135,8 +138,8 @@ cv::Mat MakeClutterImage(int width, int height, uint64_t seed) {
         cv::polylines(img, pts, false, c, std::max(1, int(d.Uniform(1, 5) * s)), cv::LINE_AA);
         break;
       }
-      case 4:
-        DrawText(img, d, p, d.Uniform(0.4, 2.0) * s * 2, c);
+      case 7:
+        DrawText(img, d, p, d.Uniform(0.4, 1.2) * s * 2, c);
         break;
       default: {  // striped or checked panel
         const int w = static_cast<int>(size * 1.5), h = static_cast<int>(size);
