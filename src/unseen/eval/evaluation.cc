@@ -220,12 +220,6 @@ std::string EvaluationResult::Table() const {
   return s;
 }
 
-// JSON keys: frames, scored_frames, lost_frames, missing_frames, extra_records,
-// success_5cm5deg, success_2cm2deg (fractions in [0, 1], at the thresholds of the options,
-// whose values are given in success_thresholds), mean/rms/max_trans_err_mm,
-// mean/rms/max_trans_err_mm_xyz ([x, y, z] of |error|), mean/rms/max_rot_err_deg,
-// mean/rms/max_rot_err_deg_xyz, rot_err_frame ("object" or "world"), first_failure_frame,
-// fps, align_first, alignment_offset (obj_gt_from_obj_est as t (m) and q [x y z w], or null).
 nlohmann::json EvaluationResult::ToJson() const {
   const bool valid = scored_frames > 0;
   nlohmann::json j;

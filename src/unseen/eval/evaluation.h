@@ -97,8 +97,14 @@ struct EvaluationResult {
 
   // The summary table (several lines, for people).
   std::string Table() const;
-  // One JSON object; keys described in the .cc (frames, lost_frames, success_5cm5deg, ...).
-  // Statistics are null when no frame was scored; fps is null without timing.
+  // One JSON object with the keys: frames, scored_frames, lost_frames, missing_frames,
+  // extra_records, success_5cm5deg and success_2cm2deg (fractions in [0, 1] at the
+  // options' thresholds, which success_thresholds repeats), mean/rms/max_trans_err_mm,
+  // mean/rms/max_trans_err_mm_xyz ([x, y, z] of |error|), mean/rms/max_rot_err_deg,
+  // mean/rms/max_rot_err_deg_xyz, rot_err_frame ("object" or "world"),
+  // first_failure_frame (-1 when never), fps, align_first, alignment_offset
+  // (obj_gt_from_obj_est as {"t": metres, "q": [x, y, z, w]}, or null). Statistics are
+  // null when no frame was scored; fps is null when the stream carries no timing.
   nlohmann::json ToJson() const;
 };
 
