@@ -2,6 +2,7 @@
 #include "unseen/io/sequence.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -91,7 +92,8 @@ std::map<int, std::string> ListFrameFiles(const fs::path& dir,
     const auto it = std::find(extensions.begin(), extensions.end(), ext);
     if (it == extensions.end()) continue;
     const std::string stem = entry.path().stem().string();
-    if (stem.empty() || !std::all_of(stem.begin(), stem.end(), ::isdigit) || stem.size() > 9) {
+    const auto is_digit = [](unsigned char c) { return std::isdigit(c) != 0; };
+    if (stem.empty() || !std::all_of(stem.begin(), stem.end(), is_digit) || stem.size() > 9) {
       continue;
     }
     const int id = std::stoi(stem);
@@ -282,6 +284,11 @@ void ReadGroundTruth(int obj_id, const std::vector<int>& frame_ids, CameraSource
     }
   }
   source->has_gt = true;
+  if (std::none_of(source->cam_from_obj.begin(), source->cam_from_obj.end(),
+                   [](const std::optional<Rigid3d>& p) { return p.has_value(); })) {
+    UNSEEN_LOG_WARN("{}: no frame has object {}; camera {} has no ground truth for it", gt_file,
+                    obj_id, source->name);
+  }
 }
 
 // models/obj_<id>.<ext> in the first of `dirs` that has one, or "".

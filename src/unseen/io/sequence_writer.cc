@@ -143,7 +143,7 @@ SequenceWriter::~SequenceWriter() {
   if (!impl_ || impl_->finished) return;
   try {
     Finish();
-  } catch (const Error& e) {
+  } catch (const std::exception& e) {
     UNSEEN_LOG_ERROR("{}", e.what());
   }
 }
@@ -229,7 +229,9 @@ void SequenceWriter::WriteFrame(int frame_id, const std::vector<cv::Mat>& images
                  "{}: could not write image", image_file);
 
     if (!depths_m.empty() && !depths_m[c].empty()) {
-      fs::create_directories(cam_dir / "depth");
+      std::error_code ec;
+      fs::create_directories(cam_dir / "depth", ec);
+      UNSEEN_CHECK(!ec, "{}: cannot create folder: {}", (cam_dir / "depth").string(), ec.message());
       cv::Mat depth16(depths_m[c].size(), CV_16UC1);
       for (int y = 0; y < depth16.rows; ++y) {
         const float* in = depths_m[c].ptr<float>(y);
@@ -256,7 +258,10 @@ void SequenceWriter::WriteFrame(int frame_id, const std::vector<cv::Mat>& images
       UNSEEN_CHECK(cv::imwrite(depth_file, depth16), "{}: could not write depth", depth_file);
     }
     if (!masks.empty() && !masks[c].empty()) {
-      fs::create_directories(cam_dir / "mask_visib");
+      std::error_code ec;
+      fs::create_directories(cam_dir / "mask_visib", ec);
+      UNSEEN_CHECK(!ec, "{}: cannot create folder: {}", (cam_dir / "mask_visib").string(),
+                   ec.message());
       const std::string mask_file = (cam_dir / "mask_visib" / (stem + "_000000.png")).string();
       UNSEEN_CHECK(cv::imwrite(mask_file, masks[c]), "{}: could not write mask", mask_file);
     }
