@@ -18,6 +18,8 @@ void PreprocessOptions::Check() const {
                "preprocess.linf_epsilon {} must be in (0, 10)", linf_epsilon);
   UNSEEN_CHECK(blur_sigma_px > 0.0 && blur_sigma_px <= 10.0,
                "preprocess.blur_sigma_px {} must be in (0, 10]", blur_sigma_px);
+  UNSEEN_CHECK(silhouette_gamma >= 1.0 && silhouette_gamma <= 3.0,
+               "preprocess.silhouette_gamma {} must be in [1, 3]", silhouette_gamma);
   UNSEEN_CHECK(shading_sigma_px > 0.0 && std::isfinite(shading_sigma_px),
                "preprocess.shading_sigma_px {} must be > 0", shading_sigma_px);
 }

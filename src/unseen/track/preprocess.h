@@ -22,7 +22,13 @@ struct PreprocessOptions {
   // channel). LINF cannot equalise the silhouette's contrast, whose two sides are lit
   // differently; unequal contrast there biases the flow by a fraction of a pixel.
   bool shading_transfer = true;
-  double shading_sigma_px = 8.0;  // at level 0, divided by 2^level (at least min_linf_sigma_px)
+  double shading_sigma_px = 4.0;  // at level 0, divided by 2^level (at least min_linf_sigma_px)
+  // Camera images are gamma-encoded while a pixel integrates light linearly, so a pixel on
+  // the silhouette is the gamma-encoded mix of object and background. The supersampled
+  // virtual image mixes its silhouette pixels the same way (1 = mix the stored values).
+  // Mixing the stored values instead shifts a silhouette against a bright background
+  // outwards by a fraction of a pixel.
+  double silhouette_gamma = 2.2;
   void Check() const;
   double ShadingSigmaAtLevel(int level) const;
   // LINF sigma at pyramid `level`, pixels of that level.

@@ -292,6 +292,7 @@ bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int l
     }
   }
   if (options_.preprocess.shading_transfer) TransferShading(level, &w);
+  const float gamma = static_cast<float>(options_.preprocess.silhouette_gamma);
   for (int y = 0; y < height; ++y) {
     const uint8_t* cov = w.coverage.ptr<uint8_t>(y);
     float* out = w.composite.ptr<float>(y);
@@ -313,9 +314,17 @@ bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int l
         }
       }
       const float* in = w.input_roi.ptr<float>(y);
-      const float rest = 1.0f - 0.25f * n;
+      const float alpha = 0.25f * n;
       for (int k = 0; k < 3; ++k) {
-        out[3 * x + k] += rest * (count ? bg[k] / float(count) : in[3 * x + k]);
+        const float back = count ? bg[k] / float(count) : in[3 * x + k];
+        if (gamma == 1.0f) {
+          out[3 * x + k] += (1.0f - alpha) * back;
+        } else {  // mix in linear light, as the camera's pixel integrated it
+          const float object = std::max(out[3 * x + k] / alpha, 0.0f);
+          const float mixed = alpha * std::pow(object, gamma) +
+                              (1.0f - alpha) * std::pow(std::max(back, 0.0f), gamma);
+          out[3 * x + k] = std::pow(mixed, 1.0f / gamma);
+        }
       }
     }
   }
