@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <filesystem>
 #include <limits>
 #include <random>
@@ -281,7 +282,19 @@ SynthFrame Synthesizer::RenderFrame(int frame_id) const {
   out.clean_depths.resize(n);
   out.masks.resize(n);
   if (scene_.depth.enabled) out.depths.resize(n);
-  for (int c = 0; c < n; ++c) RenderCamera(c, frame_id, &out);
+  // Cameras in parallel (each writes only its own slots; randomness is per camera).
+  std::vector<std::exception_ptr> errors(n);
+#pragma omp parallel for schedule(dynamic) if (n > 1)
+  for (int c = 0; c < n; ++c) {
+    try {
+      RenderCamera(c, frame_id, &out);
+    } catch (...) {
+      errors[c] = std::current_exception();
+    }
+  }
+  for (const auto& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
   return out;
 }
 

@@ -51,7 +51,8 @@ class Synthesizer {
   // The object in metres as rendered (before Scene::model_scale).
   const Mesh& object_mesh() const { return object_mesh_; }
 
-  // Renders frame `frame_id` (0-based; t = frame_id / fps) for every camera. Thread-safe.
+  // Renders frame `frame_id` (0-based; t = frame_id / fps) for every camera (cameras in
+  // parallel with OpenMP). Thread-safe.
   SynthFrame RenderFrame(int frame_id) const;
 
  private:
@@ -70,7 +71,7 @@ class Synthesizer {
 
 struct SynthOptions {
   int max_frames = -1;             // > 0: render only the first max_frames frames
-  std::optional<uint64_t> seed;    // overrides the scene's seed
+  std::optional<uint64_t> seed = std::nullopt;  // overrides the scene's seed
   bool force_depth = false;        // write depth even when the scene does not ask for it
   bool progress = true;            // progress line on stderr
   void Check() const;
