@@ -39,6 +39,7 @@ struct TrackArgs {
   std::string out;
   std::string stats;
   std::string overlay;
+  int first_frame = 0;
   int max_frames = 0;
 };
 
@@ -99,8 +100,11 @@ void RunTrack(const TrackArgs& args) {
   if (args.model_scale != 1.0) model.Scale(static_cast<float>(args.model_scale));
 
   Rigid3d initial;
+  UNSEEN_CHECK(args.first_frame >= 0 && args.first_frame < sequence.num_frames(),
+               "track: --first-frame {} is outside [0, {})", args.first_frame,
+               sequence.num_frames());
   if (args.init == "gt") {
-    const std::optional<Rigid3d> gt = sequence.GroundTruth(0);
+    const std::optional<Rigid3d> gt = sequence.GroundTruth(args.first_frame);
     UNSEEN_CHECK(gt.has_value(), "track: --init gt but sequence '{}' has no ground truth for "
                  "its first frame", args.sequence);
     initial = *gt;
@@ -115,15 +119,15 @@ void RunTrack(const TrackArgs& args) {
 
   std::unique_ptr<PoseStreamWriter> writer;
   if (!args.out.empty()) writer = std::make_unique<PoseStreamWriter>(args.out);
-  const int frames = args.max_frames > 0 ? std::min(args.max_frames, sequence.num_frames())
-                                         : sequence.num_frames();
+  const int available = sequence.num_frames() - args.first_frame;
+  const int frames = args.max_frames > 0 ? std::min(args.max_frames, available) : available;
   std::vector<PoseRecord> records;
   StageTimes sum_times;
   double sum_process_ms = 0.0;
   int lost = 0, gt_frames = 0;
   double sum_t_mm = 0, max_t_mm = 0, sum_r_deg = 0, max_r_deg = 0;
   for (int i = 0; i < frames; ++i) {
-    const Frame frame = sequence.ReadFrame(i);
+    const Frame frame = sequence.ReadFrame(args.first_frame + i);
     Timer timer;
     const TrackResult r = tracker.Track(frame.images);
     const double ms = timer.ElapsedMilliseconds();
@@ -140,7 +144,7 @@ void RunTrack(const TrackArgs& args) {
     records.push_back(record);
     if (r.status != TrackStatus::kTracking) ++lost;
     std::string error_text;
-    if (const std::optional<Rigid3d> gt = sequence.GroundTruth(i)) {
+    if (const std::optional<Rigid3d> gt = sequence.GroundTruth(args.first_frame + i)) {
       const PoseDifference d = Difference(r.world_from_obj, *gt);
       const double t_mm = 1e3 * d.translation, r_deg = d.rotation_rad * 180.0 / M_PI;
       sum_t_mm += t_mm;
@@ -210,7 +214,9 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_option("--out", args->out, "Pose stream to write (.csv or .jsonl)");
   cmd->add_option("--stats", args->stats, "Statistics JSON to write (fps, mean per-stage ms)");
   cmd->add_option("--overlay", args->overlay, "Overlay video (.mp4/.avi) or PNG folder");
-  cmd->add_option("--max-frames", args->max_frames, "Track only the first N frames");
+  cmd->add_option("--first-frame", args->first_frame,
+                  "Start at this frame index (--init gt takes its ground truth)");
+  cmd->add_option("--max-frames", args->max_frames, "Track at most N frames");
   cmd->callback([args] { RunTrack(*args); });
 }
 

@@ -40,6 +40,8 @@ void FailureOptions::Check() const {
   UNSEEN_CHECK(min_pixels >= 6, "failure.min_pixels {} must be >= 6", min_pixels);
   UNSEEN_CHECK(lost_confidence >= 0.0 && lost_confidence <= 1.0,
                "failure.lost_confidence {} must be in [0, 1]", lost_confidence);
+  UNSEEN_CHECK(trust_confidence >= 0.0 && trust_confidence <= 1.0,
+               "failure.trust_confidence {} must be in [0, 1]", trust_confidence);
   UNSEEN_CHECK(recover_confidence >= lost_confidence && recover_confidence <= 1.0,
                "failure.recover_confidence {} must be in [lost_confidence = {}, 1]",
                recover_confidence, lost_confidence);
@@ -163,6 +165,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"min_pixels", Field(&fa.min_pixels)},
         {"lost_confidence", Field(&fa.lost_confidence)},
         {"lost_after_frames", Field(&fa.lost_after_frames)},
+        {"trust_confidence", Field(&fa.trust_confidence)},
         {"recover_confidence", Field(&fa.recover_confidence)},
         {"search_when_lost", Field(&fa.search_when_lost)},
         {"search_offset", Field(&fa.search_offset)}}},

@@ -56,6 +56,10 @@ struct FailureOptions {
   double bad_update_px = 2.0;
   int min_pixels = 40;
   double lost_confidence = 0.25;   // a frame below this is bad
+  // Only poses at least this confident update the motion predictor; below it the
+  // predictor coasts, so that a doubtful solve (an occluder, a drifting depth) does not
+  // teach it a velocity that carries the next frames further away.
+  double trust_confidence = 0.5;
   int lost_after_frames = 2;       // this many bad frames in a row: lost (hysteresis)
   double recover_confidence = 0.5; // while lost, a frame above this re-acquires
   bool search_when_lost = true;    // try poses around the last good one while lost
