@@ -337,11 +337,12 @@ void RasterClipped(const Mesh& mesh, const Eigen::Vector3i& tri, int32_t id, boo
   }
 }
 
-// Per material, the texture area (texels) and image area (pixels) of the drawn
-// triangles, to choose a mip-map level.
+// Per material, the texture area and image area of the drawn triangles, to choose a
+// mip-map level: texels per pixel = texels * texture_size / (pixels / 256^2).
 struct TexelStats {
   std::vector<double> texture_size;  // texels of each material's texture (0: none)
-  std::vector<double> texels, pixels;
+  std::vector<double> texels;        // sum of |uv cross products| (twice the uv area)
+  std::vector<double> pixels;        // sum of |area2| (twice the area in 1/256 px units)
 };
 
 // Scan-converts every triangle. The interpolated attributes are the texture coordinates
@@ -367,11 +368,13 @@ void RasterMesh(const Mesh& mesh, const Eigen::Vector2f* uvs,
     const ProjectedVertex& p1 = projected[tri[1]];
     const ProjectedVertex& p2 = projected[tri[2]];
     Eigen::Vector2f w[3] = {corners[0], corners[1], corners[2]};
-    if (kAttributes && uvs != nullptr) {
-      w[0] = uvs[tri[0]];
-      w[1] = uvs[tri[1]];
-      w[2] = uvs[tri[2]];
-    }
+    auto load_attributes = [&] {
+      if (kAttributes && uvs != nullptr) {
+        w[0] = uvs[tri[0]];
+        w[1] = uvs[tri[1]];
+        w[2] = uvs[tri[2]];
+      }
+    };
     if (p0.ok & p1.ok & p2.ok) {
       // Cheap rejections before the set-up: culled, degenerate, no pixel centre in the roi.
       const int64_t area2 = int64_t(p1.x - p0.x) * (p2.y - p0.y) -
@@ -382,9 +385,8 @@ void RasterMesh(const Mesh& mesh, const Eigen::Vector2f* uvs,
         if (stats->texture_size[m] > 0.0) {
           const Eigen::Vector2f& u0 = mesh.uvs[tri[0]];
           const Eigen::Vector2f d1 = mesh.uvs[tri[1]] - u0, d2 = mesh.uvs[tri[2]] - u0;
-          stats->texels[m] += std::abs(double(d1.x()) * d2.y() - double(d1.y()) * d2.x()) *
-                              stats->texture_size[m];
-          stats->pixels[m] += std::abs(double(area2)) / double(kSubpixel * kSubpixel);
+          stats->texels[m] += std::abs(double(d1.x()) * d2.y() - double(d1.y()) * d2.x());
+          stats->pixels[m] += std::abs(double(area2));
         }
       }
       const int64_t x_lo = std::max(x_first, CeilPixel(std::min({p0.x, p1.x, p2.x})));
@@ -392,11 +394,13 @@ void RasterMesh(const Mesh& mesh, const Eigen::Vector2f* uvs,
       const int64_t y_lo = std::max(y_first, CeilPixel(std::min({p0.y, p1.y, p2.y})));
       const int64_t y_hi = std::min(y_last, FloorPixel(std::max({p0.y, p1.y, p2.y})));
       if (x_lo > x_hi || y_lo > y_hi) continue;
+      load_attributes();
       RasterTriangle<kAttributes, kIds>({p0.x, p0.y, p0.inv_z, w[0].x(), w[0].y()},
                                         {p1.x, p1.y, p1.inv_z, w[1].x(), w[1].y()},
                                         {p2.x, p2.y, p2.inv_z, w[2].x(), w[2].y()}, cull, t,
                                         target);
     } else {
+      load_attributes();
       RasterClipped<kAttributes, kIds>(mesh, tri, t, cull, w, projected, clip, target);
     }
   }
@@ -826,7 +830,8 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
     const cv::Mat& texture = mesh.materials[m].texture;
     textures.push_back(texture);
     if (!mipmaps || texture.empty() || !(stats.pixels[m] > 0.0)) continue;
-    const double texels_per_pixel = stats.texels[m] / stats.pixels[m];
+    const double texels_per_pixel = stats.texels[m] * stats.texture_size[m] /
+                                    (stats.pixels[m] / double(kSubpixel * kSubpixel));
     if (MipmapLevelFor(texels_per_pixel, kMaxMipmapLevels) == 0) continue;
     const std::vector<cv::Mat> levels = MipmapLevels(texture);
     textures.back() = levels[MipmapLevelFor(texels_per_pixel, int(levels.size()))];
