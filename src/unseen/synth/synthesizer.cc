@@ -426,7 +426,8 @@ SynthSummary Synthesize(const Scene& scene_in, const std::string& out_dir,
   w.depth_scale = scene.depth.depth_scale_mm;
   w.reference_camera = scene.reference_camera;
   w.notes = fmt::format("{}: {} [rendered by unseen synth from {}, seed {}]", scene.name,
-                        scene.notes, scene.path, scene.seed);
+                        scene.notes, std::filesystem::path(scene.path).filename().string(),
+                        scene.seed);
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
   UNSEEN_CHECK(!ec, "output folder {} cannot be created: {}", out_dir, ec.message());
