@@ -29,7 +29,8 @@ struct SynthArgs {
 void AddSynthCommand(CLI::App& app) {
   auto args = std::make_shared<SynthArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "synth", "Render a synthetic sequence (DATASET.md layout, with ground truth) from a YAML scene");
+      "synth",
+      "Render a synthetic sequence (DATASET.md layout, with ground truth) from a YAML scene");
   cmd->add_option("scene", args->scene, "Scene file (see scenes/README.md)")->required();
   cmd->add_option("out_dir", args->out_dir, "Output sequence folder (created)")->required();
   cmd->add_option("--frames", args->frames, "Render only the first N frames")

@@ -3,11 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgproc.hpp>
 
 #include "unseen/util/error.h"
 
@@ -50,8 +49,8 @@ void DrawText(cv::Mat& img, Draw& d, cv::Point at, double scale, const cv::Scala
   std::string text;
   const int n = d.Int(3, 10);
   for (int i = 0; i < n; ++i) text += kChars[d.Int(0, sizeof(kChars) - 2)];
-  const int fonts[] = {cv::FONT_HERSHEY_SIMPLEX, cv::FONT_HERSHEY_DUPLEX,
-                       cv::FONT_HERSHEY_COMPLEX, cv::FONT_HERSHEY_TRIPLEX};
+  const int fonts[] = {cv::FONT_HERSHEY_SIMPLEX, cv::FONT_HERSHEY_DUPLEX, cv::FONT_HERSHEY_COMPLEX,
+                       cv::FONT_HERSHEY_TRIPLEX};
   cv::putText(img, text, at, fonts[d.Int(0, 3)], scale, colour,
               std::max(1, static_cast<int>(scale * 2)), cv::LINE_AA);
 }
@@ -125,7 +124,8 @@ cv::Mat MakeClutterImage(int width, int height, uint64_t seed) {
       }
       case 3:
       case 4:
-        cv::ellipse(img, p, cv::Size(static_cast<int>(size), static_cast<int>(size * d.Uniform(0.4, 1.0))),
+        cv::ellipse(img, p,
+                    cv::Size(static_cast<int>(size), static_cast<int>(size * d.Uniform(0.4, 1.0))),
                     d.Uniform(0, 180), 0, 360, c, cv::FILLED, cv::LINE_AA);
         break;
       case 5:
@@ -167,7 +167,8 @@ cv::Mat MakeClutterImage(int width, int height, uint64_t seed) {
     cv::Vec3f* row = out.ptr<cv::Vec3f>(y);
     const float* g = grain.ptr<float>(y);
     for (int x = 0; x < width; ++x) {
-      for (int c = 0; c < 3; ++c) row[x][c] = std::clamp(row[x][c] * (1.0f + 0.12f * g[x]), 0.0f, 1.0f);
+      for (int c = 0; c < 3; ++c)
+        row[x][c] = std::clamp(row[x][c] * (1.0f + 0.12f * g[x]), 0.0f, 1.0f);
     }
   }
   return out;

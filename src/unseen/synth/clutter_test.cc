@@ -2,6 +2,7 @@
 #include "unseen/synth/clutter.h"
 
 #include <gtest/gtest.h>
+
 #include <opencv2/imgproc.hpp>
 
 #include "unseen/util/error.h"

@@ -1,6 +1,8 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/synth/scene.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -8,8 +10,6 @@
 #include <limits>
 #include <set>
 #include <sstream>
-
-#include <yaml-cpp/yaml.h>
 
 #include "unseen/image/image_io.h"
 #include "unseen/mesh/mesh_io.h"
@@ -41,7 +41,8 @@ class Field {
   [[noreturn]] void Fail(fmt::format_string<Args...> format, Args&&... args) const {
     const YAML::Mark mark = node_.Mark();
     std::string where = fmt::format("{}: field '{}'", *file_, path_.empty() ? "<root>" : path_);
-    if (mark.line >= 0) where += fmt::format(" (line {}, column {})", mark.line + 1, mark.column + 1);
+    if (mark.line >= 0)
+      where += fmt::format(" (line {}, column {})", mark.line + 1, mark.column + 1);
     throw Error(where + ": " + fmt::format(format, std::forward<Args>(args)...));
   }
 
@@ -61,9 +62,7 @@ class Field {
     if (!child.IsDefined()) Fail("missing required field '{}'", key);
     return Field(child, path_.empty() ? key : path_ + "." + key, file_);
   }
-  Field Index(size_t i) const {
-    return Field(node_[i], fmt::format("{}[{}]", path_, i), file_);
-  }
+  Field Index(size_t i) const { return Field(node_[i], fmt::format("{}[{}]", path_, i), file_); }
 
   // Rejects keys not in `known` (catches misspelt field names).
   void ExpectKeys(std::initializer_list<const char*> known) const {
@@ -177,7 +176,8 @@ Eigen::Vector3d Vec3Mm(const Field& f) { return f.Vec3() * 1e-3; }
 Eigen::Vector3d ColorRgb(const Field& f) {
   const Eigen::Vector3d rgb = f.Vec3();
   for (int i = 0; i < 3; ++i) {
-    if (rgb[i] < 0.0 || rgb[i] > 1.0) f.Fail("colour components must be in [0, 1], got {}", f.Text());
+    if (rgb[i] < 0.0 || rgb[i] > 1.0)
+      f.Fail("colour components must be in [0, 1], got {}", f.Text());
   }
   return {rgb[2], rgb[1], rgb[0]};
 }
@@ -206,8 +206,8 @@ std::string FilePath(const Field& f, const Context& ctx) {
       if (end == std::string::npos) f.Fail("unterminated '${{' in path {}", f.Text());
       ++start;
     } else {
-      while (end < raw.size() && (std::isalnum(static_cast<unsigned char>(raw[end])) ||
-                                  raw[end] == '_')) {
+      while (end < raw.size() &&
+             (std::isalnum(static_cast<unsigned char>(raw[end])) || raw[end] == '_')) {
         ++end;
       }
     }
@@ -231,8 +231,8 @@ std::string FilePath(const Field& f, const Context& ctx) {
 // look_at_mm (+ up, default [0, -1, 0], i.e. world y points down).
 Rigid3d ParseWorldFromCam(const Field& f) {
   f.ExpectKeys({"position_mm", "yaw_deg", "pitch_deg", "roll_deg", "look_at_mm", "up"});
-  const Eigen::Vector3d position = f.Has("position_mm") ? Vec3Mm(f.Child("position_mm"))
-                                                        : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d position =
+      f.Has("position_mm") ? Vec3Mm(f.Child("position_mm")) : Eigen::Vector3d::Zero();
   if (f.Has("look_at_mm")) {
     if (f.Has("yaw_deg") || f.Has("pitch_deg") || f.Has("roll_deg")) {
       f.Fail("give either look_at_mm or yaw/pitch/roll, not both");
@@ -253,7 +253,9 @@ Rigid3d ParseWorldFromCam(const Field& f) {
     r.col(2) = zn;
     return Rigid3d(Eigen::Quaterniond(r), position);
   }
-  auto angle = [&](const char* key) { return f.Has(key) ? f.Child(key).Double() * kDegToRad : 0.0; };
+  auto angle = [&](const char* key) {
+    return f.Has(key) ? f.Child(key).Double() * kDegToRad : 0.0;
+  };
   const Eigen::Quaterniond r =
       Eigen::Quaterniond(Eigen::AngleAxisd(angle("yaw_deg"), Eigen::Vector3d::UnitY())) *
       Eigen::Quaterniond(Eigen::AngleAxisd(-angle("pitch_deg"), Eigen::Vector3d::UnitX())) *
@@ -267,8 +269,10 @@ PinholeCamera ParseIntrinsics(const Field& f) {
   PinholeCamera c;
   c.width = f.Child("width").Int();
   c.height = f.Child("height").Int();
-  if (c.width <= 0 || c.width > 16384) f.Child("width").Fail("must be in [1, 16384], got {}", c.width);
-  if (c.height <= 0 || c.height > 16384) f.Child("height").Fail("must be in [1, 16384], got {}", c.height);
+  if (c.width <= 0 || c.width > 16384)
+    f.Child("width").Fail("must be in [1, 16384], got {}", c.width);
+  if (c.height <= 0 || c.height > 16384)
+    f.Child("height").Fail("must be in [1, 16384], got {}", c.height);
   if (f.Has("hfov_deg")) {
     if (f.Has("fx") || f.Has("fy")) f.Fail("give either hfov_deg or fx/fy, not both");
     const Field h = f.Child("hfov_deg");
@@ -289,7 +293,8 @@ RigCamera ParseCamera(const Field& f, const std::string& default_name) {
   RigCamera cam;
   cam.name = f.Has("name") ? f.Child("name").String() : default_name;
   if (cam.name.empty() || cam.name.find('/') != std::string::npos) {
-    f.Child("name").Fail("camera name must be a non-empty folder name, got {}", f.Child("name").Text());
+    f.Child("name").Fail("camera name must be a non-empty folder name, got {}",
+                         f.Child("name").Text());
   }
   cam.intrinsics = ParseIntrinsics(f);
   if (f.Has("world_from_cam")) cam.world_from_cam = ParseWorldFromCam(f.Child("world_from_cam"));
@@ -308,7 +313,9 @@ std::vector<RigCamera> ParseCameraLine(const Field& f) {
   const Eigen::Vector3d to = Vec3Mm(f.Child("to_mm"));
   const std::string prefix = f.Has("name_prefix") ? f.Child("name_prefix").String() : "cam";
   const PinholeCamera intrinsics = ParseIntrinsics(f);
-  auto angle = [&](const char* key) { return f.Has(key) ? f.Child(key).Double() * kDegToRad : 0.0; };
+  auto angle = [&](const char* key) {
+    return f.Has(key) ? f.Child(key).Double() * kDegToRad : 0.0;
+  };
   const Eigen::Quaterniond r =
       Eigen::Quaterniond(Eigen::AngleAxisd(angle("yaw_deg"), Eigen::Vector3d::UnitY())) *
       Eigen::Quaterniond(Eigen::AngleAxisd(-angle("pitch_deg"), Eigen::Vector3d::UnitX())) *
@@ -335,7 +342,8 @@ ObjectSpec ParseObject(const Field& f, const Context& ctx) {
     f.ExpectKeys({"type", "edge_mm", "texture_px", "scale"});
     o.type = ObjectSpec::Type::kLetteredCube;
     if (f.Has("edge_mm")) o.edge_m = Mm(f.Child("edge_mm"));
-    if (!(o.edge_m > 0.0)) f.Child("edge_mm").Fail("must be positive, got {}", f.Child("edge_mm").Text());
+    if (!(o.edge_m > 0.0))
+      f.Child("edge_mm").Fail("must be positive, got {}", f.Child("edge_mm").Text());
     if (f.Has("texture_px")) {
       o.texture_px = f.Child("texture_px").Int();
       if (o.texture_px < 16 || o.texture_px > 4096) {
@@ -348,7 +356,8 @@ ObjectSpec ParseObject(const Field& f, const Context& ctx) {
     if (f.Has("radius_mm")) o.radius_m = f.Child("radius_mm").Positive(Mm(f.Child("radius_mm")));
     if (f.Has("rings")) o.rings = f.Child("rings").Int();
     if (f.Has("segments")) o.segments = f.Child("segments").Int();
-    if (o.rings < 3 || o.rings > 1000) f.Child("rings").Fail("must be in [3, 1000], got {}", o.rings);
+    if (o.rings < 3 || o.rings > 1000)
+      f.Child("rings").Fail("must be in [3, 1000], got {}", o.rings);
     if (o.segments < 3 || o.segments > 2000) {
       f.Child("segments").Fail("must be in [3, 2000], got {}", o.segments);
     }
@@ -386,7 +395,8 @@ ObjectSpec ParseObject(const Field& f, const Context& ctx) {
 // ---- trajectories ---------------------------------------------------------------------
 
 std::vector<AxisRotation> ParseRotationSteps(const Field& f) {
-  if (!f.IsSequence()) f.Fail("expected a list of {{axis: [x, y, z], deg: angle}}, got {}", f.Text());
+  if (!f.IsSequence())
+    f.Fail("expected a list of {{axis: [x, y, z], deg: angle}}, got {}", f.Text());
   std::vector<AxisRotation> steps;
   for (size_t i = 0; i < f.size(); ++i) {
     const Field s = f.Index(i);
@@ -426,7 +436,8 @@ std::shared_ptr<const Trajectory> ParseTrajectory(const Field& f, const Context&
       o.speed_m_s = std::sqrt(sq) * 1e-3;
       if (!(o.speed_m_s > 0.0)) v.Fail("velocity must not be zero, got {}", v.Text());
     }
-    if (f.Has("start_time_s")) o.start_time_s = f.Child("start_time_s").NonNegative(f.Child("start_time_s").Double());
+    if (f.Has("start_time_s"))
+      o.start_time_s = f.Child("start_time_s").NonNegative(f.Child("start_time_s").Double());
     if (f.Has("initial_rotation")) {
       o.initial_rotation = ComposeRotations(ParseRotationSteps(f.Child("initial_rotation")));
     }
@@ -438,7 +449,8 @@ std::shared_ptr<const Trajectory> ParseTrajectory(const Field& f, const Context&
       if (s.Has("frame")) {
         const Field fr = s.Child("frame");
         const std::string frame = fr.String();
-        if (frame != "object" && frame != "world") fr.Fail("must be 'object' or 'world', got {}", fr.Text());
+        if (frame != "object" && frame != "world")
+          fr.Fail("must be 'object' or 'world', got {}", fr.Text());
         o.spin.world_frame = frame == "world";
       }
     }
@@ -497,8 +509,10 @@ BackgroundSpec ParseBackground(const Field& f, const Context& ctx) {
   } else {
     type_field.Fail("unknown background type {} (color, image, clutter)", type_field.Text());
   }
-  if (f.Has("distance_mm")) b.distance_m = f.Child("distance_mm").Positive(Mm(f.Child("distance_mm")));
-  if (f.Has("brightness")) b.brightness = f.Child("brightness").NonNegative(f.Child("brightness").Double());
+  if (f.Has("distance_mm"))
+    b.distance_m = f.Child("distance_mm").Positive(Mm(f.Child("distance_mm")));
+  if (f.Has("brightness"))
+    b.brightness = f.Child("brightness").NonNegative(f.Child("brightness").Double());
   return b;
 }
 
@@ -531,7 +545,8 @@ LightingSpec ParseLights(const Field& f) {
     } else {
       type_field.Fail("unknown light type {} (directional, point)", type_field.Text());
     }
-    if (s.Has("intensity")) light.intensity = s.Child("intensity").NonNegative(s.Child("intensity").Double());
+    if (s.Has("intensity"))
+      light.intensity = s.Child("intensity").NonNegative(s.Child("intensity").Double());
     if (s.Has("color_rgb")) light.color_bgr = ColorRgb(s.Child("color_rgb"));
     if (s.Has("cast_shadows")) light.cast_shadows = s.Child("cast_shadows").Bool();
     l.lights.push_back(light);
@@ -549,12 +564,15 @@ OccluderSpec ParseOccluder(const Field& f, const Context& ctx, double fps) {
     o.type = OccluderSpec::Type::kBar;
     if (f.Has("size_mm")) {
       o.size_m = Vec3Mm(f.Child("size_mm"));
-      if (!(o.size_m.minCoeff() > 0.0)) f.Child("size_mm").Fail("sizes must be positive, got {}", f.Child("size_mm").Text());
+      if (!(o.size_m.minCoeff() > 0.0))
+        f.Child("size_mm").Fail("sizes must be positive, got {}", f.Child("size_mm").Text());
     }
     o.start_m = Vec3Mm(f.Child("start_mm"));
     o.end_m = Vec3Mm(f.Child("end_mm"));
-    if (f.Has("speed_mm_s")) o.speed_m_s = f.Child("speed_mm_s").Positive(Mm(f.Child("speed_mm_s")));
-    if (f.Has("start_time_s")) o.start_time_s = f.Child("start_time_s").NonNegative(f.Child("start_time_s").Double());
+    if (f.Has("speed_mm_s"))
+      o.speed_m_s = f.Child("speed_mm_s").Positive(Mm(f.Child("speed_mm_s")));
+    if (f.Has("start_time_s"))
+      o.start_time_s = f.Child("start_time_s").NonNegative(f.Child("start_time_s").Double());
     if (f.Has("color_rgb")) o.color_bgr = ColorRgb(f.Child("color_rgb"));
     if (f.Has("shaded")) o.shaded = f.Child("shaded").Bool();
   } else if (type == "object") {
@@ -569,10 +587,14 @@ OccluderSpec ParseOccluder(const Field& f, const Context& ctx, double fps) {
 }
 
 SensorSpec ParseSensor(const Field& f) {
-  f.ExpectKeys({"noise_sigma", "blur_sigma_px", "gain", "antialias", "image_format", "jpeg_quality"});
+  f.ExpectKeys(
+      {"noise_sigma", "blur_sigma_px", "gain", "antialias", "image_format", "jpeg_quality"});
   SensorSpec s;
-  if (f.Has("noise_sigma")) s.noise_sigma = f.Child("noise_sigma").InRange(f.Child("noise_sigma").Double(), 0.0, 128.0);
-  if (f.Has("blur_sigma_px")) s.blur_sigma_px = f.Child("blur_sigma_px").InRange(f.Child("blur_sigma_px").Double(), 0.0, 50.0);
+  if (f.Has("noise_sigma"))
+    s.noise_sigma = f.Child("noise_sigma").InRange(f.Child("noise_sigma").Double(), 0.0, 128.0);
+  if (f.Has("blur_sigma_px"))
+    s.blur_sigma_px =
+        f.Child("blur_sigma_px").InRange(f.Child("blur_sigma_px").Double(), 0.0, 50.0);
   if (f.Has("gain")) s.gain = f.Child("gain").Positive(f.Child("gain").Double());
   if (f.Has("antialias")) {
     const Field a = f.Child("antialias");
@@ -585,7 +607,8 @@ SensorSpec ParseSensor(const Field& f) {
   if (f.Has("image_format")) {
     const Field fmt_field = f.Child("image_format");
     s.image_format = fmt_field.String();
-    if (s.image_format != "png" && s.image_format != "jpg") fmt_field.Fail("must be 'png' or 'jpg', got {}", fmt_field.Text());
+    if (s.image_format != "png" && s.image_format != "jpg")
+      fmt_field.Fail("must be 'png' or 'jpg', got {}", fmt_field.Text());
   }
   if (f.Has("jpeg_quality")) {
     const Field q = f.Child("jpeg_quality");
@@ -599,9 +622,14 @@ DepthSpec ParseDepth(const Field& f) {
   f.ExpectKeys({"enabled", "noise_sigma_mm", "hole_fraction", "depth_scale_mm"});
   DepthSpec d;
   d.enabled = f.Has("enabled") ? f.Child("enabled").Bool() : true;
-  if (f.Has("noise_sigma_mm")) d.noise_sigma_mm = f.Child("noise_sigma_mm").InRange(f.Child("noise_sigma_mm").Double(), 0.0, 1000.0);
-  if (f.Has("hole_fraction")) d.hole_fraction = f.Child("hole_fraction").InRange(f.Child("hole_fraction").Double(), 0.0, 0.9);
-  if (f.Has("depth_scale_mm")) d.depth_scale_mm = f.Child("depth_scale_mm").InRange(f.Child("depth_scale_mm").Double(), 1e-3, 100.0);
+  if (f.Has("noise_sigma_mm"))
+    d.noise_sigma_mm =
+        f.Child("noise_sigma_mm").InRange(f.Child("noise_sigma_mm").Double(), 0.0, 1000.0);
+  if (f.Has("hole_fraction"))
+    d.hole_fraction = f.Child("hole_fraction").InRange(f.Child("hole_fraction").Double(), 0.0, 0.9);
+  if (f.Has("depth_scale_mm"))
+    d.depth_scale_mm =
+        f.Child("depth_scale_mm").InRange(f.Child("depth_scale_mm").Double(), 1e-3, 100.0);
   return d;
 }
 
@@ -619,9 +647,9 @@ Mesh BuildObjectMesh(const ObjectSpec& spec) {
       mesh = MakeLetteredCube(spec.edge_m, spec.texture_px);
       break;
     case ObjectSpec::Type::kTexturedSphere:
-      mesh = MakeTexturedSphere(spec.radius_m, spec.rings, spec.segments,
-                                spec.texture_path.empty() ? cv::Mat()
-                                                          : LoadColorImage(spec.texture_path));
+      mesh = MakeTexturedSphere(
+          spec.radius_m, spec.rings, spec.segments,
+          spec.texture_path.empty() ? cv::Mat() : LoadColorImage(spec.texture_path));
       break;
     case ObjectSpec::Type::kTexturedBox: {
       std::array<cv::Mat, 6> textures;
@@ -646,8 +674,8 @@ int Scene::NumFrames() const {
   UNSEEN_CHECK(std::isfinite(end),
                "{}: 'frames' is needed: the trajectory never ends (a pure spin)", path);
   const double n = std::floor(end * fps + 1e-9) + 1.0;
-  UNSEEN_CHECK(n >= 1.0 && n <= 1e6, "{}: trajectory end {} s gives {} frames at {} fps", path,
-               end, n, fps);
+  UNSEEN_CHECK(n >= 1.0 && n <= 1e6, "{}: trajectory end {} s gives {} frames at {} fps", path, end,
+               n, fps);
   return static_cast<int>(n);
 }
 
@@ -673,8 +701,8 @@ void Scene::Check() const {
   UNSEEN_CHECK(depth.hole_fraction >= 0.0 && depth.hole_fraction < 1.0 &&
                    depth.noise_sigma_mm >= 0.0 && depth.depth_scale_mm > 0.0,
                "{}: depth options out of range", path);
-  UNSEEN_CHECK(model_scale > 0.0 && std::isfinite(model_scale), "{}: model_scale {} must be positive",
-               path, model_scale);
+  UNSEEN_CHECK(model_scale > 0.0 && std::isfinite(model_scale),
+               "{}: model_scale {} must be positive", path, model_scale);
   for (size_t i = 0; i < occluders.size(); ++i) {
     UNSEEN_CHECK(occluders[i].type != OccluderSpec::Type::kObject || occluders[i].trajectory,
                  "{}: occluder {} has no trajectory", path, i);
@@ -698,8 +726,7 @@ Scene ParseScene(const std::string& text, const std::string& path, const std::st
 
   Scene s;
   s.path = path;
-  s.name = f.Has("name") ? f.Child("name").String()
-                         : std::filesystem::path(path).stem().string();
+  s.name = f.Has("name") ? f.Child("name").String() : std::filesystem::path(path).stem().string();
   if (f.Has("notes")) s.notes = f.Child("notes").String();
   if (f.Has("seed")) s.seed = f.Child("seed").UInt64();
   if (f.Has("fps")) s.fps = f.Child("fps").InRange(f.Child("fps").Double(), 0.1, 10000.0);
@@ -709,7 +736,8 @@ Scene ParseScene(const std::string& text, const std::string& path, const std::st
       s.frames = -1;
     } else {
       s.frames = fr.Int();
-      if (s.frames < 1 || s.frames > 1000000) fr.Fail("must be in [1, 1000000] or 'until_end', got {}", fr.Text());
+      if (s.frames < 1 || s.frames > 1000000)
+        fr.Fail("must be in [1, 1000000] or 'until_end', got {}", fr.Text());
     }
   }
 
@@ -752,12 +780,14 @@ Scene ParseScene(const std::string& text, const std::string& path, const std::st
   if (f.Has("occluders")) {
     const Field occ = f.Child("occluders");
     if (!occ.IsSequence()) occ.Fail("expected a list of occluders, got {}", occ.Text());
-    for (size_t i = 0; i < occ.size(); ++i) s.occluders.push_back(ParseOccluder(occ.Index(i), ctx, s.fps));
+    for (size_t i = 0; i < occ.size(); ++i)
+      s.occluders.push_back(ParseOccluder(occ.Index(i), ctx, s.fps));
   }
   if (f.Has("sensor")) s.sensor = ParseSensor(f.Child("sensor"));
   if (f.Has("depth")) s.depth = ParseDepth(f.Child("depth"));
   if (f.Has("masks")) s.write_masks = f.Child("masks").Bool();
-  if (f.Has("model_scale")) s.model_scale = f.Child("model_scale").Positive(f.Child("model_scale").Double());
+  if (f.Has("model_scale"))
+    s.model_scale = f.Child("model_scale").Positive(f.Child("model_scale").Double());
 
   if (s.frames < 0 && !std::isfinite(s.trajectory->EndTimeS())) {
     f.Fail("'frames' is needed: the trajectory never ends");

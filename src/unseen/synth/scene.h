@@ -12,14 +12,13 @@
 // and column, and the offending value.
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "unseen/camera/camera.h"
 #include "unseen/mesh/mesh.h"
@@ -39,8 +38,9 @@ struct ObjectSpec {
   int rings = 25, segments = 50;  // kTexturedSphere
   std::string texture_path;       // kTexturedSphere: equirectangular image; empty = globe
   Eigen::Vector3d size_m = Eigen::Vector3d(0.16, 0.10, 0.06);  // kTexturedBox (x, y, z)
-  std::array<std::string, 6> face_texture_paths;  // kTexturedBox: +x -x +y -y +z -z; empty = generated
-  double scale = 1.0;             // extra uniform scale applied to the built mesh
+  std::array<std::string, 6>
+      face_texture_paths;  // kTexturedBox: +x -x +y -y +z -z; empty = generated
+  double scale = 1.0;      // extra uniform scale applied to the built mesh
 };
 
 // Builds the mesh (metres, object frame) of `spec`. Throws unseen::Error naming the file
@@ -51,12 +51,12 @@ struct BackgroundSpec {
   enum class Type { kColor, kImage, kClutter };
   Type type = Type::kColor;
   Eigen::Vector3d color_bgr = Eigen::Vector3d::Ones();  // kColor
-  std::string image_path;                              // kImage: absolute path
+  std::string image_path;                               // kImage: absolute path
   // A plane facing the cameras at this z (world frame) carries the background; it gives the
   // background its depth and its parallax across a rig. An image is stretched to cover the
   // union of the cameras' views on that plane (with a margin).
   double distance_m = 1.8;
-  double brightness = 1.0;  // the background's colours are multiplied by this (>= 0)
+  double brightness = 1.0;      // the background's colours are multiplied by this (>= 0)
   int clutter_width_px = 1600;  // kClutter: generated texture size
   int clutter_height_px = 800;
 };
@@ -67,7 +67,7 @@ struct LightSpec {
   // kDirectional: the direction the light travels (from the light into the scene), world
   // frame, unit; e.g. (1, 0.15, 0.35) is a low sun from the left.
   Eigen::Vector3d direction = Eigen::Vector3d(0.0, 1.0, 0.0);
-  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // kPoint: world position at t = 0
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();    // kPoint: world position at t = 0
   Eigen::Vector3d velocity_m_s = Eigen::Vector3d::Zero();  // kPoint: linear motion
   // Irradiance factor: a surface facing a directional light receives `intensity`; facing a
   // point light at `reference_distance_m`, `intensity` (inverse-square fall-off).
@@ -102,10 +102,10 @@ struct OccluderSpec {
 };
 
 struct SensorSpec {
-  double noise_sigma = 0.0;   // additive gaussian noise, grey levels of 255, per channel
-  double blur_sigma_px = 0.0; // gaussian (defocus) blur, pixels; 0 = none
-  double gain = 1.0;          // exposure gain applied before noise (low-light compensation)
-  int antialias = 3;          // supersampling factor, odd (1, 3 or 5), downsampled by area
+  double noise_sigma = 0.0;          // additive gaussian noise, grey levels of 255, per channel
+  double blur_sigma_px = 0.0;        // gaussian (defocus) blur, pixels; 0 = none
+  double gain = 1.0;                 // exposure gain applied before noise (low-light compensation)
+  int antialias = 3;                 // supersampling factor, odd (1, 3 or 5), downsampled by area
   std::string image_format = "png";  // "png" or "jpg"
   int jpeg_quality = 92;
 };
@@ -118,12 +118,12 @@ struct DepthSpec {
 };
 
 struct Scene {
-  std::string path;   // the YAML file (for messages)
+  std::string path;  // the YAML file (for messages)
   std::string name;
   std::string notes;
   uint64_t seed = 1;
   double fps = 30.0;
-  int frames = -1;    // -1: until the trajectory ends (the last frame at or after its end)
+  int frames = -1;  // -1: until the trajectory ends (the last frame at or after its end)
   Rig rig;
   int reference_camera = 0;
   ObjectSpec object;
@@ -133,8 +133,8 @@ struct Scene {
   std::vector<OccluderSpec> occluders;
   SensorSpec sensor;
   DepthSpec depth;
-  bool write_masks = true;     // camK/mask_visib/<frame>_000000.png
-  double model_scale = 1.0;    // the written model is scaled by this (Table 4.2 scale errors)
+  bool write_masks = true;   // camK/mask_visib/<frame>_000000.png
+  double model_scale = 1.0;  // the written model is scaled by this (Table 4.2 scale errors)
 
   // Number of frames to render: `frames`, or enough to reach the trajectory's end
   // (floor(EndTimeS() * fps) + 1). Throws when neither is finite.

@@ -1,11 +1,11 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/synth/scene.h"
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "unseen/util/error.h"
 
@@ -211,25 +211,44 @@ TEST(Scene, RejectsBadInput) {
   EXPECT_TRUE(HasSubstr(ErrorOf(replaced("seed: 7", "seed: -1")), "'seed'"));
   EXPECT_TRUE(HasSubstr(ErrorOf(replaced("frames: 12", "frames: 0")), "frames"));
   EXPECT_TRUE(HasSubstr(ErrorOf(replaced("width: 512", "width: 0")), "cameras[0].width"));
-  EXPECT_TRUE(HasSubstr(ErrorOf(replaced("    hfov_deg: 34\n", "")), "missing required field 'fx'"));
+  EXPECT_TRUE(
+      HasSubstr(ErrorOf(replaced("    hfov_deg: 34\n", "")), "missing required field 'fx'"));
   EXPECT_TRUE(HasSubstr(ErrorOf(replaced("lettered_cube", "teapot")), "unknown object type"));
   EXPECT_TRUE(HasSubstr(ErrorOf(replaced("edge_mm: 96", "edge_mm: -96")), "object.edge_mm"));
   EXPECT_TRUE(HasSubstr(ErrorOf(replaced("[0, 0, 1000]", "[0, 0]")), "list of 3 numbers"));
-  EXPECT_TRUE(HasSubstr(ErrorOf(replaced("[240, 0, 120]", "[240, 0, .nan]")), "trajectory.waypoints_mm[1][2]"));
-  EXPECT_TRUE(HasSubstr(ErrorOf(replaced("speed_mm_s: 60", "speed_mm_s: 60\n  velocity_mm_s: [1, 2]")), "exactly one of"));
-  EXPECT_TRUE(HasSubstr(ErrorOf(replaced("type: waypoints", "type: spline")), "unknown trajectory type"));
-  EXPECT_TRUE(HasSubstr(ErrorOf(std::string(kMinimal) + "sensor: {antialias: 2}\n"), "sensor.antialias"));
+  EXPECT_TRUE(HasSubstr(ErrorOf(replaced("[240, 0, 120]", "[240, 0, .nan]")),
+                        "trajectory.waypoints_mm[1][2]"));
+  EXPECT_TRUE(
+      HasSubstr(ErrorOf(replaced("speed_mm_s: 60", "speed_mm_s: 60\n  velocity_mm_s: [1, 2]")),
+                "exactly one of"));
+  EXPECT_TRUE(
+      HasSubstr(ErrorOf(replaced("type: waypoints", "type: spline")), "unknown trajectory type"));
+  EXPECT_TRUE(
+      HasSubstr(ErrorOf(std::string(kMinimal) + "sensor: {antialias: 2}\n"), "sensor.antialias"));
   EXPECT_TRUE(HasSubstr(ErrorOf(std::string(kMinimal) + "sensor: {image_format: bmp}\n"), "'bmp'"));
-  EXPECT_TRUE(HasSubstr(ErrorOf(std::string(kMinimal) + "background: {type: image, path: no_such.png}\n"), "does not exist"));
-  EXPECT_TRUE(HasSubstr(ErrorOf(std::string(kMinimal) + "background: {type: color, color_rgb: [2, 0, 0]}\n"), "background.color_rgb"));
-  EXPECT_TRUE(HasSubstr(ErrorOf(std::string(kMinimal) + "background: {type: image, path: $UNSEEN_NO_SUCH_VAR/a.png}\n"), "UNSEEN_NO_SUCH_VAR"));
-  EXPECT_TRUE(HasSubstr(ErrorOf(std::string(kMinimal) + "lights: {sources: [{type: area}]}\n"), "unknown light type"));
-  EXPECT_TRUE(HasSubstr(ErrorOf(std::string(kMinimal) + "lights: {sources: [{type: directional, direction: [0, 0, 0]}]}\n"), "lights.sources[0].direction"));
-  EXPECT_TRUE(HasSubstr(ErrorOf(std::string(kMinimal) + "depth: {hole_fraction: 1.5}\n"), "depth.hole_fraction"));
-  EXPECT_TRUE(HasSubstr(ErrorOf(std::string(kMinimal) + "reference_camera: cam9\n"), "no camera called"));
-  EXPECT_TRUE(HasSubstr(ErrorOf(std::string(kMinimal) + "occluders: [{type: bar, start_mm: [0, 0, 0]}]\n"), "missing required field 'end_mm'"));
+  EXPECT_TRUE(
+      HasSubstr(ErrorOf(std::string(kMinimal) + "background: {type: image, path: no_such.png}\n"),
+                "does not exist"));
+  EXPECT_TRUE(HasSubstr(
+      ErrorOf(std::string(kMinimal) + "background: {type: color, color_rgb: [2, 0, 0]}\n"),
+      "background.color_rgb"));
   EXPECT_TRUE(HasSubstr(ErrorOf(std::string(kMinimal) +
-                      "cameras2: 1\n"), "unknown field 'cameras2'"));
+                                "background: {type: image, path: $UNSEEN_NO_SUCH_VAR/a.png}\n"),
+                        "UNSEEN_NO_SUCH_VAR"));
+  EXPECT_TRUE(HasSubstr(ErrorOf(std::string(kMinimal) + "lights: {sources: [{type: area}]}\n"),
+                        "unknown light type"));
+  EXPECT_TRUE(HasSubstr(ErrorOf(std::string(kMinimal) +
+                                "lights: {sources: [{type: directional, direction: [0, 0, 0]}]}\n"),
+                        "lights.sources[0].direction"));
+  EXPECT_TRUE(HasSubstr(ErrorOf(std::string(kMinimal) + "depth: {hole_fraction: 1.5}\n"),
+                        "depth.hole_fraction"));
+  EXPECT_TRUE(
+      HasSubstr(ErrorOf(std::string(kMinimal) + "reference_camera: cam9\n"), "no camera called"));
+  EXPECT_TRUE(
+      HasSubstr(ErrorOf(std::string(kMinimal) + "occluders: [{type: bar, start_mm: [0, 0, 0]}]\n"),
+                "missing required field 'end_mm'"));
+  EXPECT_TRUE(
+      HasSubstr(ErrorOf(std::string(kMinimal) + "cameras2: 1\n"), "unknown field 'cameras2'"));
 }
 
 TEST(Scene, LoadsFileAndResolvesRelativePaths) {

@@ -6,13 +6,12 @@
 #include <exception>
 #include <filesystem>
 #include <limits>
+#include <opencv2/imgproc.hpp>
 #include <random>
 
-#include <opencv2/imgproc.hpp>
-
+#include "unseen/image/image_io.h"
 #include "unseen/io/sequence.h"
 #include "unseen/mesh/primitives.h"
-#include "unseen/image/image_io.h"
 #include "unseen/render/rasterizer.h"
 #include "unseen/render/shading.h"
 #include "unseen/synth/clutter.h"
@@ -26,7 +25,7 @@ namespace unseen {
 namespace {
 
 // Independent random streams per (seed, frame, camera, purpose).
-enum class Stream : uint32_t { kImageNoise = 1, kDepthNoise = 2, kDepthHoles = 3, kClutter = 4 };
+enum class Stream : uint32_t { kImageNoise = 1, kDepthNoise = 2, kDepthHoles = 3 };
 
 std::mt19937 MakeRng(uint64_t seed, int frame, int camera, Stream stream) {
   std::seed_seq seq{static_cast<uint32_t>(seed), static_cast<uint32_t>(seed >> 32),
@@ -54,8 +53,7 @@ PinholeCamera Supersampled(const PinholeCamera& c, int factor) {
 Mesh MakeColoredBox(const Eigen::Vector3d& size_m, const Eigen::Vector3d& color_bgr) {
   std::array<cv::Mat, 6> textures;
   for (auto& t : textures) {
-    t = cv::Mat(2, 2, CV_32FC3,
-                cv::Scalar(color_bgr[0], color_bgr[1], color_bgr[2]));
+    t = cv::Mat(2, 2, CV_32FC3, cv::Scalar(color_bgr[0], color_bgr[1], color_bgr[2]));
   }
   return MakeTexturedBox(size_m, textures);
 }
@@ -177,9 +175,11 @@ void DropDepthHoles(double fraction, std::mt19937& rng, cv::Mat* depth) {
   int dropped = 0;
   for (int attempts = 0; dropped < target && attempts < 100 * target + 1000; ++attempts) {
     const int cx = ux(rng), cy = uy(rng), r = ur(rng);
-    for (int y = std::max(0, cy - r); y <= std::min(depth->rows - 1, cy + r) && dropped < target; ++y) {
+    for (int y = std::max(0, cy - r); y <= std::min(depth->rows - 1, cy + r) && dropped < target;
+         ++y) {
       float* row = depth->ptr<float>(y);
-      for (int x = std::max(0, cx - r); x <= std::min(depth->cols - 1, cx + r) && dropped < target; ++x) {
+      for (int x = std::max(0, cx - r); x <= std::min(depth->cols - 1, cx + r) && dropped < target;
+           ++x) {
         if ((x - cx) * (x - cx) + (y - cy) * (y - cy) > r * r + r) continue;
         if (row[x] > 0.0f) {
           row[x] = 0.0f;
@@ -217,7 +217,6 @@ void Composite(const RenderBuffers& b, uint8_t id, cv::Mat* color, cv::Mat* dept
 }
 
 }  // namespace
-
 
 Synthesizer::Synthesizer(Scene scene) : scene_(std::move(scene)) {
   scene_.Check();
@@ -260,7 +259,7 @@ Synthesizer::Synthesizer(Scene scene) : scene_(std::move(scene)) {
       const double length = (o.end_m - o.start_m).norm();
       // Speed 0: sweep from start to end over the sequence (from start_time_s).
       const double sweep_s = duration_s - o.start_time_s;
-      t.speed_m_s = o.speed_m_s > 0.0 ? o.speed_m_s
+      t.speed_m_s = o.speed_m_s > 0.0                 ? o.speed_m_s
                     : (length > 0.0 && sweep_s > 0.0) ? length / sweep_s
                                                       : 1.0;
       occluder_trajectories_.push_back(std::make_shared<WaypointTrajectory>(t));
@@ -387,7 +386,8 @@ void Synthesizer::RenderCamera(int camera, int frame_id, SynthFrame* out) const 
     cv::Mat d = clean_depth.clone();
     if (scene_.depth.noise_sigma_mm > 0.0) {
       std::mt19937 rng = MakeRng(scene_.seed, frame_id, camera, Stream::kDepthNoise);
-      std::normal_distribution<float> noise(0.0f, static_cast<float>(scene_.depth.noise_sigma_mm * 1e-3));
+      std::normal_distribution<float> noise(0.0f,
+                                            static_cast<float>(scene_.depth.noise_sigma_mm * 1e-3));
       for (int v = 0; v < d.rows; ++v) {
         float* row = d.ptr<float>(v);
         for (int u = 0; u < d.cols; ++u) {
@@ -425,9 +425,9 @@ SynthSummary Synthesize(const Scene& scene_in, const std::string& out_dir,
   w.jpeg_quality = scene.sensor.jpeg_quality;
   w.depth_scale = scene.depth.depth_scale_mm;
   w.reference_camera = scene.reference_camera;
-  w.notes = fmt::format("{}: {} [rendered by unseen synth from {}, seed {}]", scene.name,
-                        scene.notes, std::filesystem::path(scene.path).filename().string(),
-                        scene.seed);
+  w.notes =
+      fmt::format("{}: {} [rendered by unseen synth from {}, seed {}]", scene.name, scene.notes,
+                  std::filesystem::path(scene.path).filename().string(), scene.seed);
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
   UNSEEN_CHECK(!ec, "output folder {} cannot be created: {}", out_dir, ec.message());
@@ -436,10 +436,9 @@ SynthSummary Synthesize(const Scene& scene_in, const std::string& out_dir,
   if (scene.model_scale != 1.0) model.Scale(static_cast<float>(scene.model_scale));
   writer.WriteModel(model);
 
-  UNSEEN_LOG_INFO("synth: {} -> {}: {} frames x {} cameras ({}x{} px, antialias {}x)",
-                  scene.path, out_dir, frames, scene.rig.size(),
-                  scene.rig.cameras[0].intrinsics.width, scene.rig.cameras[0].intrinsics.height,
-                  scene.sensor.antialias);
+  UNSEEN_LOG_INFO("synth: {} -> {}: {} frames x {} cameras ({}x{} px, antialias {}x)", scene.path,
+                  out_dir, frames, scene.rig.size(), scene.rig.cameras[0].intrinsics.width,
+                  scene.rig.cameras[0].intrinsics.height, scene.sensor.antialias);
   ProgressLine progress("synth", frames, options.progress);
   for (int k = 0; k < frames; ++k) {
     const SynthFrame f = synth.RenderFrame(k);

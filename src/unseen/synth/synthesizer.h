@@ -17,11 +17,11 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "unseen/mesh/mesh.h"
 #include "unseen/synth/scene.h"
@@ -32,12 +32,12 @@ namespace unseen {
 struct SynthFrame {
   int frame_id = 0;
   double time_s = 0.0;
-  Rigid3d world_from_obj;        // ground truth
-  std::vector<cv::Mat> images;   // per camera CV_32FC3 BGR [0, 1] after sensor effects
-  std::vector<cv::Mat> depths;   // per camera CV_32FC1 metres (0 = none) with depth noise and
-                                 // holes; empty when the scene has no depth output
+  Rigid3d world_from_obj;             // ground truth
+  std::vector<cv::Mat> images;        // per camera CV_32FC3 BGR [0, 1] after sensor effects
+  std::vector<cv::Mat> depths;        // per camera CV_32FC1 metres (0 = none) with depth noise and
+                                      // holes; empty when the scene has no depth output
   std::vector<cv::Mat> clean_depths;  // per camera CV_32FC1 metres, exact (before noise)
-  std::vector<cv::Mat> masks;    // per camera CV_8UC1, 255 where the object is visible
+  std::vector<cv::Mat> masks;         // per camera CV_8UC1, 255 where the object is visible
 };
 
 class Synthesizer {
@@ -70,10 +70,10 @@ class Synthesizer {
 };
 
 struct SynthOptions {
-  int max_frames = -1;             // > 0: render only the first max_frames frames
+  int max_frames = -1;                          // > 0: render only the first max_frames frames
   std::optional<uint64_t> seed = std::nullopt;  // overrides the scene's seed
-  bool force_depth = false;        // write depth even when the scene does not ask for it
-  bool progress = true;            // progress line on stderr
+  bool force_depth = false;  // write depth even when the scene does not ask for it
+  bool progress = true;      // progress line on stderr
   void Check() const;
 };
 

@@ -1,14 +1,14 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/synth/synthesizer.h"
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <string>
-
-#include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
 
 #include "unseen/io/sequence.h"
 #include "unseen/render/rasterizer.h"
@@ -62,8 +62,8 @@ RenderBuffers RenderTruth(const Mesh& mesh, const RigCamera& cam, const Rigid3d&
   RenderBuffers b;
   RenderOptions o;
   o.write_color = false;
-  Render(mesh, cam.intrinsics, cam.cam_from_world() * world_from_obj, cam.intrinsics.ImageRect(),
-         o, &b);
+  Render(mesh, cam.intrinsics, cam.cam_from_world() * world_from_obj, cam.intrinsics.ImageRect(), o,
+         &b);
   return b;
 }
 
@@ -149,13 +149,15 @@ TEST(Synthesize, DeterministicForSeed) {
     ++compared;
   }
   EXPECT_GT(compared, 10);
-  EXPECT_EQ(ReadBytes(a / "cam1" / "rgb" / "000001.png"), ReadBytes(c / "cam1" / "rgb" / "000001.png"));
+  EXPECT_EQ(ReadBytes(a / "cam1" / "rgb" / "000001.png"),
+            ReadBytes(c / "cam1" / "rgb" / "000001.png"));
   EXPECT_FALSE(fs::exists(c / "cam1" / "rgb" / "000002.png"));
 
   // Another seed changes the noise.
   const fs::path d = TempDir("det_d");
   Synthesize(scene, d.string(), {.max_frames = 1, .seed = 99, .progress = false});
-  EXPECT_NE(ReadBytes(a / "cam0" / "rgb" / "000000.png"), ReadBytes(d / "cam0" / "rgb" / "000000.png"));
+  EXPECT_NE(ReadBytes(a / "cam0" / "rgb" / "000000.png"),
+            ReadBytes(d / "cam0" / "rgb" / "000000.png"));
   for (const auto& p : {a, b, c, d}) fs::remove_all(p);
 }
 
@@ -208,7 +210,8 @@ TEST(Synthesizer, LightsShadeTheObjectOnly) {
   cv::erode(not_object, not_object, cv::Mat(), cv::Point(-1, -1), 2);  // away from edges
   cv::Mat inside;
   cv::erode(a.masks[0], inside, cv::Mat(), cv::Point(-1, -1), 2);
-  const cv::Scalar bg_a = cv::mean(a.images[0], not_object), bg_b = cv::mean(b.images[0], not_object);
+  const cv::Scalar bg_a = cv::mean(a.images[0], not_object),
+                   bg_b = cv::mean(b.images[0], not_object);
   const cv::Scalar obj_a = cv::mean(a.images[0], inside), obj_b = cv::mean(b.images[0], inside);
   for (int ch = 0; ch < 3; ++ch) {
     EXPECT_NEAR(bg_a[ch], bg_b[ch], 1e-6);  // the background is not lit
@@ -218,8 +221,8 @@ TEST(Synthesizer, LightsShadeTheObjectOnly) {
 }
 
 TEST(Synthesizer, DepthNoiseAndHoles) {
-  Scene scene = ParseScene(TinyScene("depth: {noise_sigma_mm: 2.0, hole_fraction: 0.1}\n"),
-                           "tiny.yaml", ".");
+  Scene scene =
+      ParseScene(TinyScene("depth: {noise_sigma_mm: 2.0, hole_fraction: 0.1}\n"), "tiny.yaml", ".");
   const SynthFrame f = Synthesizer(scene).RenderFrame(1);
   const cv::Mat& clean = f.clean_depths[0];
   const cv::Mat& noisy = f.depths[0];
@@ -245,10 +248,9 @@ TEST(Synthesizer, DepthNoiseAndHoles) {
 TEST(Synthesizer, RejectsBadInput) {
   EXPECT_THROW(SynthOptions{.max_frames = 0}.Check(), Error);
   // A camera looking away from the background plane.
-  const Scene scene = ParseScene(
-      TinyScene().replace(TinyScene().find("{position_mm: [50, 0, 0]}"), 25,
-                          "{position_mm: [50, 0, 0], yaw_deg: 180}"),
-      "tiny.yaml", ".");
+  const Scene scene = ParseScene(TinyScene().replace(TinyScene().find("{position_mm: [50, 0, 0]}"),
+                                                     25, "{position_mm: [50, 0, 0], yaw_deg: 180}"),
+                                 "tiny.yaml", ".");
   EXPECT_THROW(Synthesizer{scene}, Error);
   // Unwritable output folder.
   const Scene ok = ParseScene(TinyScene(), "tiny.yaml", ".");

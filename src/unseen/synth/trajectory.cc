@@ -56,9 +56,9 @@ void WaypointTrajectoryOptions::Check(const std::string& what) const {
                "{}: speed {} m/s must be positive and finite", what, speed_m_s);
   UNSEEN_CHECK(std::isfinite(start_time_s), "{}: start time {} s is not finite", what,
                start_time_s);
-  UNSEEN_CHECK(initial_rotation.coeffs().allFinite() &&
-                   std::abs(initial_rotation.norm() - 1.0) < 1e-6,
-               "{}: initial rotation is not a unit quaternion", what);
+  UNSEEN_CHECK(
+      initial_rotation.coeffs().allFinite() && std::abs(initial_rotation.norm() - 1.0) < 1e-6,
+      "{}: initial rotation is not a unit quaternion", what);
   try {
     spin.Check();
   } catch (const Error& e) {
@@ -135,8 +135,7 @@ Rigid3d KeyframeTrajectory::WorldFromObj(double t_s) const {
 
 std::unique_ptr<KeyframeTrajectory> LoadPoseFileTrajectory(const std::string& path, double fps,
                                                            double time_offset_s) {
-  UNSEEN_CHECK(std::isfinite(fps) && fps > 0.0, "pose file {}: fps {} must be positive", path,
-               fps);
+  UNSEEN_CHECK(std::isfinite(fps) && fps > 0.0, "pose file {}: fps {} must be positive", path, fps);
   const std::vector<PoseRecord> records = ReadPoseStream(path);
   std::vector<const PoseRecord*> usable;
   for (const PoseRecord& r : records) {

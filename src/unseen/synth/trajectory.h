@@ -15,13 +15,12 @@
 //  * StaticTrajectory: one fixed pose.
 #pragma once
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <limits>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 
 #include "unseen/geometry/rigid3.h"
 
@@ -78,10 +77,10 @@ struct WaypointTrajectoryOptions {
   // Positions relative to `origin_m`, metres, travelled in order; at least one. The first
   // is the start position. Consecutive duplicates are allowed (zero-length segments).
   std::vector<Eigen::Vector3d> waypoints_m = {Eigen::Vector3d::Zero()};
-  double speed_m_s = 0.04;       // constant speed along the polyline, m/s (> 0)
-  double start_time_s = 0.0;     // the object waits at the first waypoint until then
+  double speed_m_s = 0.04;    // constant speed along the polyline, m/s (> 0)
+  double start_time_s = 0.0;  // the object waits at the first waypoint until then
   Eigen::Quaterniond initial_rotation = Eigen::Quaterniond::Identity();  // world_from_obj at t=0
-  SpinOptions spin;              // spin starts at t = 0 and never stops
+  SpinOptions spin;  // spin starts at t = 0 and never stops
   // Throws unseen::Error naming `what` and the offending field.
   void Check(const std::string& what = "waypoint trajectory") const;
 };

@@ -1,10 +1,10 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/synth/trajectory.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
-
-#include <gtest/gtest.h>
 
 #include "unseen/io/pose_stream.h"
 #include "unseen/io/sequence.h"
@@ -17,22 +17,22 @@ namespace {
 WaypointTrajectoryOptions ZigZag(double speed_m_s) {
   WaypointTrajectoryOptions o;
   o.origin_m = {0.0, 0.0, 1.0};
-  o.waypoints_m = {{0, 0, 0},          {0.06, 0, 0.04}, {0.10, 0, 0},
-                   {0.16, 0, 0.08},    {0.20, 0, 0.04}, {0.24, 0, 0.12}};
+  o.waypoints_m = {{0, 0, 0},       {0.06, 0, 0.04}, {0.10, 0, 0},
+                   {0.16, 0, 0.08}, {0.20, 0, 0.04}, {0.24, 0, 0.12}};
   o.speed_m_s = speed_m_s;
   return o;
 }
 
 TEST(ComposeRotations, AppliesStepsInOrderAboutObjectAxes) {
-  const Eigen::Quaterniond r = ComposeRotations({{Eigen::Vector3d::UnitX(), 90.0},
-                                                 {Eigen::Vector3d::UnitY(), 90.0}});
+  const Eigen::Quaterniond r =
+      ComposeRotations({{Eigen::Vector3d::UnitX(), 90.0}, {Eigen::Vector3d::UnitY(), 90.0}});
   // R = Rx(90) Ry(90): z -> (Ry 90) -> x -> (Rx 90) -> x;  x -> -z -> y.
   EXPECT_TRUE((r * Eigen::Vector3d::UnitZ()).isApprox(Eigen::Vector3d::UnitX(), 1e-12));
   EXPECT_TRUE((r * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY(), 1e-12));
   // The development sequences' initial rotation (x 20 deg, y 30 deg) as in their ground truth.
-  const Eigen::Matrix3d dev = ComposeRotations({{Eigen::Vector3d::UnitX(), 20.0},
-                                                {Eigen::Vector3d::UnitY(), 30.0}})
-                                  .toRotationMatrix();
+  const Eigen::Matrix3d dev =
+      ComposeRotations({{Eigen::Vector3d::UnitX(), 20.0}, {Eigen::Vector3d::UnitY(), 30.0}})
+          .toRotationMatrix();
   Eigen::Matrix3d expected;
   expected << 0.8660254038, 0.0, 0.5, 0.1710100717, 0.9396926208, -0.2961981327, -0.4698463104,
       0.3420201433, 0.8137976813;
@@ -45,16 +45,16 @@ TEST(WaypointTrajectory, PositionsAtKnownTimes) {
   const WaypointTrajectory traj(ZigZag(0.04));
   const double l0 = std::hypot(0.06, 0.04);
   const double l1 = std::hypot(0.04, 0.04);
-  EXPECT_NEAR(traj.PathLengthM(),
-              l0 + l1 + std::hypot(0.06, 0.08) + l1 + std::hypot(0.04, 0.08), 1e-12);
+  EXPECT_NEAR(traj.PathLengthM(), l0 + l1 + std::hypot(0.06, 0.08) + l1 + std::hypot(0.04, 0.08),
+              1e-12);
   EXPECT_TRUE(traj.WorldFromObj(0.0).translation().isApprox(Eigen::Vector3d(0, 0, 1), 1e-12));
   // Half-way along the first segment.
   EXPECT_TRUE(traj.WorldFromObj(0.5 * l0 / 0.04)
                   .translation()
                   .isApprox(Eigen::Vector3d(0.03, 0, 1.02), 1e-12));
   // Exactly at the first corner, and a quarter into the second segment.
-  EXPECT_TRUE(traj.WorldFromObj(l0 / 0.04).translation().isApprox(Eigen::Vector3d(0.06, 0, 1.04),
-                                                                 1e-12));
+  EXPECT_TRUE(
+      traj.WorldFromObj(l0 / 0.04).translation().isApprox(Eigen::Vector3d(0.06, 0, 1.04), 1e-12));
   EXPECT_TRUE(traj.WorldFromObj((l0 + 0.25 * l1) / 0.04)
                   .translation()
                   .isApprox(Eigen::Vector3d(0.07, 0, 1.03), 1e-12));
@@ -83,9 +83,9 @@ TEST(WaypointTrajectory, MovesAtConstantSpeed) {
   }
   EXPECT_GT(frames_checked, 70);
   // Away from corners the chord equals the arc.
-  EXPECT_NEAR((traj.WorldFromObj(0.1).translation() - traj.WorldFromObj(0.1 + dt).translation())
-                  .norm(),
-              speed * dt, 1e-12);
+  EXPECT_NEAR(
+      (traj.WorldFromObj(0.1).translation() - traj.WorldFromObj(0.1 + dt).translation()).norm(),
+      speed * dt, 1e-12);
 }
 
 TEST(WaypointTrajectory, SpinAngleGrowsWithTime) {
@@ -104,8 +104,7 @@ TEST(WaypointTrajectory, SpinAngleGrowsWithTime) {
     const Eigen::Quaterniond dw = in_world.RotationAt(t) * in_world.RotationAt(0.0).conjugate();
     EXPECT_TRUE((dw * Eigen::Vector3d::UnitY()).isApprox(Eigen::Vector3d::UnitY(), 1e-9));
     // Object frame: the object's own y axis is fixed: R(0)^-1 R(t) keeps y.
-    const Eigen::Quaterniond dobj =
-        in_object.RotationAt(0.0).conjugate() * in_object.RotationAt(t);
+    const Eigen::Quaterniond dobj = in_object.RotationAt(0.0).conjugate() * in_object.RotationAt(t);
     EXPECT_TRUE((dobj * Eigen::Vector3d::UnitY()).isApprox(Eigen::Vector3d::UnitY(), 1e-9));
   }
   // With a tilted object the two differ.
@@ -192,8 +191,11 @@ TEST(WaypointTrajectory, MatchesDevelopmentSequenceGroundTruth) {
     bool world_frame;
   };
   const Case cases[] = {
-      {"cube_white_zigzag", 40.0, {{Eigen::Vector3d::UnitX(), 20}, {Eigen::Vector3d::UnitY(), 30}},
-       0.15, false},
+      {"cube_white_zigzag",
+       40.0,
+       {{Eigen::Vector3d::UnitX(), 20}, {Eigen::Vector3d::UnitY(), 30}},
+       0.15,
+       false},
       {"sphere_clutter_spin", 30.0, {{Eigen::Vector3d::UnitX(), 90}}, 0.3, true},
   };
   for (const Case& c : cases) {
