@@ -5,8 +5,10 @@
 
 #include <filesystem>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <string>
 
+#include "unseen/mesh/mesh_io.h"
 #include "unseen/util/error.h"
 
 namespace unseen {
@@ -266,6 +268,46 @@ TEST(Scene, LoadsFileAndResolvesRelativePaths) {
   }
   const Scene s = LoadScene((dir / "scene.yaml").string());
   EXPECT_TRUE(s.trajectory->WorldFromObj(0.25).translation().isApprox(Eigen::Vector3d(0.05, 0, 1)));
+  std::filesystem::remove_all(dir);
+}
+
+TEST(BuildObjectMesh, BuildsEveryObjectType) {
+  const auto dir = std::filesystem::temp_directory_path() / "unseen_scene_objects";
+  std::filesystem::create_directories(dir);
+  // A mesh file in millimetres and a texture image, referenced relative to the scene.
+  ObjectSpec cube;
+  cube.edge_m = 0.05;
+  SaveMesh(BuildObjectMesh(cube), (dir / "cube_mm.ply").string(), 1000.0);
+  cv::imwrite((dir / "tex.png").string(), cv::Mat(32, 64, CV_8UC3, cv::Scalar(10, 200, 30)));
+  const std::string base = kMinimal;
+  auto object_of = [&](const std::string& object_yaml) {
+    std::string text = base;
+    const size_t at = text.find("object: {type: lettered_cube, edge_mm: 96}");
+    text.replace(at, 42, object_yaml);
+    return BuildObjectMesh(ParseScene(text, "objects.yaml", dir.string()).object);
+  };
+  Eigen::Vector3f lo, hi;
+  const Mesh from_file = object_of("object: {type: mesh, path: cube_mm.ply, unit_mm: 1, scale: 2}");
+  from_file.BoundingBox(&lo, &hi);
+  EXPECT_NEAR(hi.x() - lo.x(), 0.1, 1e-5);  // 50 mm x scale 2, in metres
+  const Mesh sphere = object_of(
+      "object: {type: textured_sphere, radius_mm: 30, rings: 8, segments: 16, "
+      "texture: tex.png}");
+  sphere.BoundingBox(&lo, &hi);
+  EXPECT_NEAR(hi.z() - lo.z(), 0.06, 1e-5);
+  ASSERT_FALSE(sphere.materials.empty());
+  const cv::Vec3f texel = sphere.materials[0].texture.at<cv::Vec3f>(5, 5);
+  EXPECT_NEAR(texel[1], 200.0 / 255.0, 1e-3);  // the file's green, not the generated globe
+  const Mesh box =
+      object_of("object: {type: textured_box, size_mm: [40, 20, 10], textures: {+x: tex.png}}");
+  box.BoundingBox(&lo, &hi);
+  EXPECT_TRUE((hi - lo).isApprox(Eigen::Vector3f(0.04f, 0.02f, 0.01f), 1e-5f));
+  EXPECT_EQ(object_of("object: {type: lettered_cube, edge_mm: 96}").num_triangles(), 12);
+  // Missing files are named.
+  EXPECT_TRUE(HasSubstr(
+      ErrorOf(base.substr(0, base.find("object:")) + "object: {type: mesh, path: nothing.ply}\n" +
+              base.substr(base.find("trajectory:"))),
+      "object.path"));
   std::filesystem::remove_all(dir);
 }
 
