@@ -257,6 +257,29 @@ TEST(Synthesizer, RejectsBadInput) {
   EXPECT_THROW(Synthesize(ok, "/proc/unseen_no_such/dir", {.progress = false}), Error);
 }
 
+TEST(Synthesizer, MovingLightChangesShadingOnly) {
+  Scene scene = ParseScene(TinyScene(), "tiny.yaml", ".");
+  scene.sensor.noise_sigma = 0.0;
+  scene.trajectory = std::make_shared<StaticTrajectory>(
+      Rigid3d(ExpSO3(Eigen::Vector3d(0.3, 0.5, 0.0)), Eigen::Vector3d(0, 0, 0.9)));
+  // A point light sweeping from the far left to the right (30 m/s: 2 m in two frames).
+  LightSpec light;
+  light.type = LightSpec::Type::kPoint;
+  light.position_m = {-1.0, 0.0, 0.5};
+  light.velocity_m_s = {30.0, 0.0, 0.0};
+  scene.lighting.lights = {light};
+  const Synthesizer synth(scene);
+  const SynthFrame a = synth.RenderFrame(0), b = synth.RenderFrame(2);
+  EXPECT_EQ(cv::countNonZero(a.masks[0] != b.masks[0]), 0);  // nothing moved but the light
+  cv::Mat not_object;
+  cv::bitwise_not(a.masks[0], not_object);
+  cv::erode(not_object, not_object, cv::Mat(), cv::Point(-1, -1), 2);
+  cv::Mat diff;
+  cv::absdiff(a.images[0], b.images[0], diff);
+  EXPECT_LT(cv::norm(diff, cv::NORM_INF, not_object), 1e-6);
+  EXPECT_GT(cv::norm(diff, cv::NORM_INF, a.masks[0]), 0.1);
+}
+
 // Every shipped scene loads, follows the SPEC 8 camera protocol, and shows the object.
 TEST(Synthesizer, ShippedScenesRender) {
   const fs::path dir = fs::path(UNSEEN_SOURCE_DIR) / "scenes";
