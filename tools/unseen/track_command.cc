@@ -113,7 +113,8 @@ void RunTrack(const TrackArgs& args) {
   }
 
   TrackerOptions tracker_options = options;
-  if (args.config.empty() && sequence.fps() > 0) tracker_options.frame_interval_s = 1.0 / sequence.fps();
+  // The predictor's time step is the sequence's frame interval.
+  if (sequence.fps() > 0) tracker_options.frame_interval_s = 1.0 / sequence.fps();
   Tracker tracker(sequence.rig(), std::move(model), tracker_options);
   tracker.Initialize(initial);
 
