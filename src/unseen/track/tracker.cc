@@ -367,7 +367,11 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
     }
     s.times.preprocess_ms += timer.ElapsedMilliseconds();
 
-    for (int iteration = 0; iteration < po.max_iterations_per_level; ++iteration) {
+    const int max_iterations = level == 0 ? po.max_iterations_per_level
+                                          : std::min(po.max_iterations_per_level,
+                                                     po.coarse_max_iterations);
+    const double min_update_px = level == 0 ? po.min_update_px : po.coarse_min_update_px;
+    for (int iteration = 0; iteration < max_iterations; ++iteration) {
       SelectionCounts counts;
       for (int c = 0; c < ncam; ++c) {
         CameraWork& w = *work_[c];
@@ -437,7 +441,7 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
       ++s.iterations_per_level[level];
       if (level == 0) s.last_update_px = update_px;
       s.times.solve_ms += timer.ElapsedMilliseconds();
-      if (update_px < po.min_update_px) break;
+      if (update_px < min_update_px) break;
     }
   }
   s.correction_px = UpdatePixels(start, TwistBetween(start, pose), 0);

@@ -21,6 +21,10 @@ void PyramidOptions::Check() const {
                max_iterations_per_level);
   UNSEEN_CHECK(min_update_px >= 0.0 && std::isfinite(min_update_px),
                "pyramid.min_update_px {} must be >= 0", min_update_px);
+  UNSEEN_CHECK(coarse_max_iterations >= 1 && coarse_max_iterations <= 100,
+               "pyramid.coarse_max_iterations {} must be in [1, 100]", coarse_max_iterations);
+  UNSEEN_CHECK(coarse_min_update_px >= 0.0 && std::isfinite(coarse_min_update_px),
+               "pyramid.coarse_min_update_px {} must be >= 0", coarse_min_update_px);
   UNSEEN_CHECK(max_step_px > 0.0 && std::isfinite(max_step_px),
                "pyramid.max_step_px {} must be > 0", max_step_px);
   UNSEEN_CHECK(rim_px >= 0 && rim_px <= 20, "pyramid.rim_px {} must be in [0, 20]", rim_px);
@@ -146,6 +150,8 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"min_object_px", Field(&py.min_object_px)},
         {"max_iterations_per_level", Field(&py.max_iterations_per_level)},
         {"min_update_px", Field(&py.min_update_px)},
+        {"coarse_max_iterations", Field(&py.coarse_max_iterations)},
+        {"coarse_min_update_px", Field(&py.coarse_min_update_px)},
         {"max_step_px", Field(&py.max_step_px)},
         {"rim_px", Field(&py.rim_px)},
         {"supersampled_levels", Field(&py.supersampled_levels)}}},

@@ -30,6 +30,12 @@ struct PyramidOptions {
   double min_object_px = 32.0;
   int max_iterations_per_level = 6;  // render-solve-update rounds per level (3.9)
   double min_update_px = 0.05;    // a level is done when an update moves the object less, px
+  // Coarser levels (level > 0) only need to bring the pose within the capture range of the
+  // next finer level, so they stop earlier: at most this many rounds, and once an update
+  // moves the object less than coarse_min_update_px (pixels of that level). Each round
+  // costs a render and a pre-processing of the virtual image.
+  int coarse_max_iterations = 6;
+  double coarse_min_update_px = 0.3;
   double max_step_px = 4.0;       // one update moves the object at most this far, level px
   int rim_px = 3;                 // blurred rim around the rendered mask that is used, px
   // Levels finer than this are rendered 2x2 supersampled, so that the virtual image has the
