@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include "unseen/util/error.h"
+#include "unseen/util/testing.h"
 
 namespace unseen {
 namespace {
@@ -17,14 +18,7 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-fs::path TestDir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() / (std::string("unseen_calibration_") +
-                                                    info->test_suite_name() + "_" + info->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TestDir() { return testing::TestDir("calibration"); }
 
 std::string WriteText(const fs::path& path, const std::string& text) {
   std::ofstream(path) << text;
@@ -39,15 +33,7 @@ std::string Replace(std::string text, const std::string& from, const std::string
   return text;
 }
 
-template <typename Fn>
-void ExpectError(Fn fn, const std::vector<std::string>& substrings) {
-  try {
-    fn();
-    ADD_FAILURE() << "expected unseen::Error";
-  } catch (const Error& e) {
-    for (const std::string& s : substrings) EXPECT_THAT(e.what(), HasSubstr(s));
-  }
-}
+using testing::ExpectError;
 
 void ExpectCamera(const PinholeCamera& c, int w, int h, double fx, double fy, double cx, double cy,
                   const std::vector<double>& dist) {

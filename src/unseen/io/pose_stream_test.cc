@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "unseen/util/error.h"
+#include "unseen/util/testing.h"
 
 namespace unseen {
 namespace {
@@ -18,15 +19,7 @@ namespace fs = std::filesystem;
 using ::testing::AllOf;
 using ::testing::HasSubstr;
 
-// A fresh directory per test under the system temp dir.
-fs::path TestDir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() / (std::string("unseen_pose_stream_") +
-                                                    info->test_suite_name() + "_" + info->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TestDir() { return testing::TestDir("pose_stream"); }
 
 void WriteText(const fs::path& path, const std::string& text) {
   std::ofstream out(path);
@@ -69,15 +62,7 @@ void ExpectSame(const std::vector<PoseRecord>& a, const std::vector<PoseRecord>&
 }
 
 // Checks that `fn` throws unseen::Error whose message contains every substring.
-template <typename Fn>
-void ExpectError(Fn fn, const std::vector<std::string>& substrings) {
-  try {
-    fn();
-    ADD_FAILURE() << "expected unseen::Error";
-  } catch (const Error& e) {
-    for (const std::string& s : substrings) EXPECT_THAT(e.what(), HasSubstr(s));
-  }
-}
+using testing::ExpectError;
 
 const char kHeader[] = "frame,time_s,status,confidence,tx,ty,tz,qx,qy,qz,qw\n";
 

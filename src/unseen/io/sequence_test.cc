@@ -13,6 +13,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "unseen/util/error.h"
+#include "unseen/util/testing.h"
 
 namespace unseen {
 namespace {
@@ -23,24 +24,9 @@ using ::testing::HasSubstr;
 
 const std::string kSequences = std::string(UNSEEN_SOURCE_DIR) + "/../shared/data/sequences/";
 
-fs::path TestDir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() / (std::string("unseen_sequence_") +
-                                                    info->test_suite_name() + "_" + info->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TestDir() { return testing::TestDir("sequence"); }
 
-template <typename Fn>
-void ExpectError(Fn fn, const std::vector<std::string>& substrings) {
-  try {
-    fn();
-    ADD_FAILURE() << "expected unseen::Error";
-  } catch (const Error& e) {
-    for (const std::string& s : substrings) EXPECT_THAT(e.what(), HasSubstr(s));
-  }
-}
+using testing::ExpectError;
 
 void WriteJson(const fs::path& path, const json& j) {
   std::ofstream out(path);

@@ -11,6 +11,7 @@
 
 #include "unseen/io/sequence.h"
 #include "unseen/util/error.h"
+#include "unseen/util/testing.h"
 
 namespace unseen {
 namespace {
@@ -19,24 +20,9 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using ::testing::HasSubstr;
 
-fs::path TestDir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() / (std::string("unseen_sequence_writer_") +
-                                                    info->test_suite_name() + "_" + info->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TestDir() { return testing::TestDir("sequence_writer"); }
 
-template <typename Fn>
-void ExpectError(Fn fn, const std::vector<std::string>& substrings) {
-  try {
-    fn();
-    ADD_FAILURE() << "expected unseen::Error";
-  } catch (const Error& e) {
-    for (const std::string& s : substrings) EXPECT_THAT(e.what(), HasSubstr(s));
-  }
-}
+using testing::ExpectError;
 
 json ReadJson(const fs::path& path) {
   std::ifstream in(path);
