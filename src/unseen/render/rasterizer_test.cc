@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "unseen/util/error.h"
+#include "unseen/util/testing.h"
 
 namespace unseen {
 namespace {
@@ -691,15 +692,6 @@ TEST(Rasterizer, NormalsAreInTheCameraFrame) {
   EXPECT_EQ(out.normal.at<cv::Vec3f>(0, 0), cv::Vec3f(0, 0, 0));
 }
 
-void ExpectErrorMentioning(const std::function<void()>& f, const std::string& text) {
-  try {
-    f();
-    ADD_FAILURE() << "no unseen::Error thrown; expected one mentioning '" << text << "'";
-  } catch (const Error& e) {
-    EXPECT_THAT(e.what(), testing::HasSubstr(text));
-  }
-}
-
 TEST(Rasterizer, BadInputThrows) {
   const PinholeCamera cam = TestCamera();
   const Mesh good = MakeCube(0.2f);
@@ -714,50 +706,50 @@ TEST(Rasterizer, BadInputThrows) {
 
   Mesh m = good;
   m.triangles.clear();
-  ExpectErrorMentioning(render(m, cam, pose, options), "no triangles");
+  testing::ExpectError(render(m, cam, pose, options), {"no triangles"});
   m = good;
   m.triangles[3][1] = 8;
-  ExpectErrorMentioning(render(m, cam, pose, options), "triangle 3");
+  testing::ExpectError(render(m, cam, pose, options), {"triangle 3"});
   m = good;
   m.triangles[0][0] = -1;
-  ExpectErrorMentioning(render(m, cam, pose, options), "triangle 0");
+  testing::ExpectError(render(m, cam, pose, options), {"triangle 0"});
   m = good;
   m.vertices[5].y() = std::nanf("");
-  ExpectErrorMentioning(render(m, cam, pose, options), "vertex 5");
+  testing::ExpectError(render(m, cam, pose, options), {"vertex 5"});
   m = good;
   m.uvs.resize(3);
-  ExpectErrorMentioning(render(m, cam, pose, options), "3 uvs");
+  testing::ExpectError(render(m, cam, pose, options), {"3 uvs"});
   m = good;
   m.colors_bgr.resize(9);
-  ExpectErrorMentioning(render(m, cam, pose, options), "9 colours");
+  testing::ExpectError(render(m, cam, pose, options), {"9 colours"});
   m = good;
   m.triangle_materials.assign(m.triangles.size(), 2);
   m.materials.resize(1);
-  ExpectErrorMentioning(render(m, cam, pose, options), "material 2");
+  testing::ExpectError(render(m, cam, pose, options), {"material 2"});
   m = good;
   m.materials.resize(1);
   m.materials[0].texture = cv::Mat(4, 4, CV_8UC3);
-  ExpectErrorMentioning(render(m, cam, pose, options), "CV_32FC3");
+  testing::ExpectError(render(m, cam, pose, options), {"CV_32FC3"});
   m = good;
   m.projectors.resize(1);
-  ExpectErrorMentioning(render(m, cam, pose, options), "projector 0");
+  testing::ExpectError(render(m, cam, pose, options), {"projector 0"});
 
   PinholeCamera bad_cam = cam;
   bad_cam.fx = 0;
-  ExpectErrorMentioning(render(good, bad_cam, pose, options), "fx=0");
+  testing::ExpectError(render(good, bad_cam, pose, options), {"fx=0"});
   bad_cam = cam;
   bad_cam.width = -5;
-  ExpectErrorMentioning(render(good, bad_cam, pose, options), "-5");
+  testing::ExpectError(render(good, bad_cam, pose, options), {"-5"});
   bad_cam = cam;
   bad_cam.width = 100000;
-  ExpectErrorMentioning(render(good, bad_cam, pose, options), "100000");
+  testing::ExpectError(render(good, bad_cam, pose, options), {"100000"});
 
   RenderOptions bad_options;
   bad_options.near_m = 0;
-  ExpectErrorMentioning(render(good, cam, pose, bad_options), "near_m");
+  testing::ExpectError(render(good, cam, pose, bad_options), {"near_m"});
   Rigid3d bad_pose = pose;
   bad_pose.set_translation(Eigen::Vector3d(0, std::nan(""), 1));
-  ExpectErrorMentioning(render(good, cam, bad_pose, options), "cam_from_obj");
+  testing::ExpectError(render(good, cam, bad_pose, options), {"cam_from_obj"});
   EXPECT_THROW(Render(good, cam, pose, cam.ImageRect(), options, nullptr), Error);
 }
 

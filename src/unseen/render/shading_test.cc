@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "unseen/util/error.h"
+#include "unseen/util/testing.h"
 
 namespace unseen {
 namespace {
@@ -117,7 +118,7 @@ TEST(Shading, PointLightFallsOffWithTheSquaredDistance) {
 }
 
 // An occluder square in front of a wall: the light's shadow falls where geometry says.
-class ShadowTest : public testing::Test {
+class ShadowTest : public ::testing::Test {
  protected:
   void SetUp() override {
     Material white;
@@ -246,15 +247,6 @@ TEST(Shading, ColourIsClampedToOne) {
   EXPECT_EQ(out.color.at<cv::Vec3f>(60, 80), cv::Vec3f(1, 1, 1));
 }
 
-void ExpectErrorMentioning(const std::function<void()>& f, const std::string& text) {
-  try {
-    f();
-    ADD_FAILURE() << "no unseen::Error thrown; expected one mentioning '" << text << "'";
-  } catch (const Error& e) {
-    EXPECT_THAT(e.what(), testing::HasSubstr(text));
-  }
-}
-
 TEST(Shading, BadInputThrows) {
   const PinholeCamera cam = TestCamera();
   const Mesh square = OneSquare(Eigen::Vector3f::Ones());
@@ -272,30 +264,30 @@ TEST(Shading, BadInputThrows) {
 
   Lighting bad = lighting;
   bad.directional[1].direction_in_cam.setZero();
-  ExpectErrorMentioning(shade(bad, ShadingOptions()), "directional[1].direction_in_cam");
+  testing::ExpectError(shade(bad, ShadingOptions()), {"directional[1].direction_in_cam"});
   bad = lighting;
   bad.point[0].intensity = -1;
-  ExpectErrorMentioning(shade(bad, ShadingOptions()), "point[0].intensity");
+  testing::ExpectError(shade(bad, ShadingOptions()), {"point[0].intensity"});
   bad = lighting;
   bad.point[0].position_in_cam.x() = std::nan("");
-  ExpectErrorMentioning(shade(bad, ShadingOptions()), "point[0].position_in_cam");
+  testing::ExpectError(shade(bad, ShadingOptions()), {"point[0].position_in_cam"});
   bad = lighting;
   bad.ambient_bgr.y() = -0.1f;
-  ExpectErrorMentioning(shade(bad, ShadingOptions()), "ambient_bgr");
+  testing::ExpectError(shade(bad, ShadingOptions()), {"ambient_bgr"});
   ShadingOptions bad_options;
   bad_options.shadow_map_px = 4;
-  ExpectErrorMentioning(shade(lighting, bad_options), "shadow_map_px");
+  testing::ExpectError(shade(lighting, bad_options), {"shadow_map_px"});
   bad_options = ShadingOptions();
   bad_options.shadow_bias_m = -1;
-  ExpectErrorMentioning(shade(lighting, bad_options), "shadow_bias_m");
+  testing::ExpectError(shade(lighting, bad_options), {"shadow_bias_m"});
   PinholeCamera bad_cam = cam;
   bad_cam.fy = -1;
-  ExpectErrorMentioning(
+  testing::ExpectError(
       [&] {
         RenderShaded(square, bad_cam, Rigid3d(), cam.ImageRect(), lighting, RenderOptions(),
                      ShadingOptions(), &out);
       },
-      "fy=-1");
+      {"fy=-1"});
 }
 
 }  // namespace
