@@ -229,16 +229,31 @@ bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int l
   const RenderOptions render_options;
   Timer timer;
   const int width = w.roi.width(), height = w.roi.height();
+  // The object covers no pixel outside its bounding sphere's rectangle, so only that part
+  // of the region (plus a pixel) is rendered; the margin the filters need stays input.
+  PixelRect rr = w.roi;
+  if (const std::optional<PixelRect> rect =
+          w.camera.SphereRect(cam_from_obj * sphere_centre_, sphere_radius_)) {
+    const PixelRect tight = rect->Grow(1).Intersect(w.roi);
+    if (!tight.empty()) rr = tight;
+  }
+  const int ox = rr.x0 - w.roi.x0, oy = rr.y0 - w.roi.y0;
+  const int rw = rr.width(), rh = rr.height();
   if (!supersample) {
-    Render(*model_, w.camera, cam_from_obj, w.roi, render_options, &w.render);
+    Render(*model_, w.camera, cam_from_obj, rr, render_options, &w.render);
     times->render_ms += timer.ElapsedMilliseconds();
-    if (w.render.mask.rows != height || w.render.mask.cols != width) return false;
+    if (w.render.mask.rows != rh || w.render.mask.cols != rw) return false;
     // Virtual image = input with the render pasted over it (3.1 step 2).
     timer.Restart();
+    const cv::Rect sub(ox, oy, rw, rh);
     w.input_roi.copyTo(w.composite);
-    w.render.color.copyTo(w.composite, w.render.mask);
-    w.mask = w.render.mask;
-    w.depth = w.render.depth;
+    w.render.color.copyTo(w.composite(sub), w.render.mask);
+    w.mask.create(height, width, CV_8UC1);
+    w.mask.setTo(0);
+    w.render.mask.copyTo(w.mask(sub));
+    w.depth.create(height, width, CV_32FC1);
+    w.depth.setTo(0.0f);
+    w.render.depth.copyTo(w.depth(sub));
     if (options_.preprocess.shading_transfer) {
       w.coverage.create(height, width, CV_8UC1);
       w.coverage.setTo(0);
@@ -249,10 +264,10 @@ bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int l
     return true;
   }
   const PinholeCamera fine = w.camera.Scaled(0.5);
-  const PixelRect fine_roi{2 * w.roi.x0, 2 * w.roi.y0, 2 * w.roi.x1, 2 * w.roi.y1};
+  const PixelRect fine_roi{2 * rr.x0, 2 * rr.y0, 2 * rr.x1, 2 * rr.y1};
   Render(*model_, fine, cam_from_obj, fine_roi, render_options, &w.render);
   times->render_ms += timer.ElapsedMilliseconds();
-  if (w.render.mask.rows != 2 * height || w.render.mask.cols != 2 * width) return false;
+  if (w.render.mask.rows != 2 * rh || w.render.mask.cols != 2 * rw) return false;
 
   // Area-average the 2x2 samples: premultiplied colour, coverage, mean depth of the
   // covered samples. Where coverage is partial, the part not covered shows the background
@@ -264,19 +279,31 @@ bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int l
   w.depth.create(height, width, CV_32FC1);
   w.coverage.create(height, width, CV_8UC1);
   for (int y = 0; y < height; ++y) {
-    const uint8_t* m0 = w.render.mask.ptr<uint8_t>(2 * y);
-    const uint8_t* m1 = w.render.mask.ptr<uint8_t>(2 * y + 1);
-    const float* d0 = w.render.depth.ptr<float>(2 * y);
-    const float* d1 = w.render.depth.ptr<float>(2 * y + 1);
-    const float* c0 = w.render.color.ptr<float>(2 * y);
-    const float* c1 = w.render.color.ptr<float>(2 * y + 1);
     const float* in = w.input_roi.ptr<float>(y);
     float* out = w.composite.ptr<float>(y);
     uint8_t* mask = w.mask.ptr<uint8_t>(y);
     uint8_t* cov = w.coverage.ptr<uint8_t>(y);
     float* depth = w.depth.ptr<float>(y);
+    const bool row_rendered = y >= oy && y < oy + rh;
+    const int x_begin = row_rendered ? ox : width, x_end = row_rendered ? ox + rw : width;
+    // Outside the rendered rectangle: no coverage, the input shows.
     for (int x = 0; x < width; ++x) {
-      const int a = 2 * x, b = 2 * x + 1;
+      if (x >= x_begin && x < x_end) continue;
+      cov[x] = 0;
+      mask[x] = 0;
+      depth[x] = 0.0f;
+      for (int k = 0; k < 3; ++k) out[3 * x + k] = in[3 * x + k];
+    }
+    if (!row_rendered) continue;
+    const int ry = y - oy;
+    const uint8_t* m0 = w.render.mask.ptr<uint8_t>(2 * ry);
+    const uint8_t* m1 = w.render.mask.ptr<uint8_t>(2 * ry + 1);
+    const float* d0 = w.render.depth.ptr<float>(2 * ry);
+    const float* d1 = w.render.depth.ptr<float>(2 * ry + 1);
+    const float* c0 = w.render.color.ptr<float>(2 * ry);
+    const float* c1 = w.render.color.ptr<float>(2 * ry + 1);
+    for (int x = x_begin; x < x_end; ++x) {
+      const int a = 2 * (x - ox), b = a + 1;
       const int n = (m0[a] != 0) + (m0[b] != 0) + (m1[a] != 0) + (m1[b] != 0);
       cov[x] = static_cast<uint8_t>(n);
       mask[x] = n ? 255 : 0;
