@@ -17,19 +17,28 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 // Weighted normal equations of one camera, camera frame.
 void Accumulate(const FlowEquations& eq, const std::vector<float>* weights, Matrix6d* h,
                 Vector6d* g) {
+  // Products and sums in float over blocks of equations (vectorised), the block sums in
+  // double, so that the sum over thousands of equations keeps its precision.
+  constexpr int kBlock = 64;
   double acc[27] = {0};
   const int n = eq.size();
-  for (int i = 0; i < n; ++i) {
-    const float* a = eq.rows[i].data();
-    const float w = weights ? (*weights)[i] : 1.0f;
-    if (w <= 0.0f) continue;
-    const float wb = w * eq.rhs[i];
-    int k = 0;
-    for (int r = 0; r < 6; ++r) {
-      const float war = w * a[r];
-      for (int c = r; c < 6; ++c) acc[k++] += static_cast<double>(war * a[c]);
-      acc[21 + r] += static_cast<double>(wb * a[r]);
+  for (int begin = 0; begin < n; begin += kBlock) {
+    const int end = std::min(n, begin + kBlock);
+    float block[27] = {0};
+    for (int i = begin; i < end; ++i) {
+      const float* a = eq.rows[i].data();
+      const float w = weights ? (*weights)[i] : 1.0f;
+      if (w <= 0.0f) continue;
+      const float wb = w * eq.rhs[i];
+      float wa[6];
+      for (int r = 0; r < 6; ++r) wa[r] = w * a[r];
+      int k = 0;
+      for (int r = 0; r < 6; ++r) {
+        for (int c = r; c < 6; ++c) block[k++] += wa[r] * a[c];
+      }
+      for (int r = 0; r < 6; ++r) block[21 + r] += wb * a[r];
     }
+    for (int k = 0; k < 27; ++k) acc[k] += block[k];
   }
   int k = 0;
   for (int r = 0; r < 6; ++r) {
