@@ -39,16 +39,24 @@ cv::Mat WideLowPass(const cv::Mat& image, double sigma_px) {
     return out;
   }
   // Area down-sampling is itself a box low-pass of width `factor` (variance factor^2/12);
-  // the remaining blur makes up the rest of the requested variance.
+  // the remaining blur makes up the rest of the requested variance. The image is padded
+  // (border replicated) to a multiple of `factor`, so that both resizes have an integer
+  // scale (OpenCV's fast paths) and the up-sampled pixels sit exactly on the blocks.
   const double sigma_small =
       std::sqrt(std::max(sigma_px * sigma_px - factor * factor / 12.0, 0.25)) / factor;
+  const int small_cols = (image.cols + factor - 1) / factor;
+  const int small_rows = (image.rows + factor - 1) / factor;
+  const int pad_cols = small_cols * factor - image.cols, pad_rows = small_rows * factor - image.rows;
+  cv::Mat padded = image;
+  if (pad_cols > 0 || pad_rows > 0) {
+    cv::copyMakeBorder(image, padded, 0, pad_rows, 0, pad_cols, cv::BORDER_REPLICATE);
+  }
   cv::Mat small;
-  cv::resize(image, small,
-             cv::Size((image.cols + factor - 1) / factor, (image.rows + factor - 1) / factor), 0, 0,
-             cv::INTER_AREA);
+  cv::resize(padded, small, cv::Size(small_cols, small_rows), 0, 0, cv::INTER_AREA);
   cv::GaussianBlur(small, small, cv::Size(KernelSize(sigma_small), KernelSize(sigma_small)),
                    sigma_small, sigma_small, cv::BORDER_REPLICATE);
-  cv::resize(small, out, image.size(), 0, 0, cv::INTER_LINEAR);
+  cv::resize(small, out, padded.size(), 0, 0, cv::INTER_LINEAR);
+  if (pad_cols > 0 || pad_rows > 0) out = out(cv::Rect(0, 0, image.cols, image.rows)).clone();
   return out;
 }
 
