@@ -144,7 +144,8 @@ FlowSolution SolveFlow(const std::vector<FlowEquations>& cameras,
                              .eigenvalues()(0);
 
     // Residuals of the linear model, normalized to pixels of normal flow.
-    abs_residuals.clear();
+    abs_residuals.resize(out.equations);
+    float* abs_out = abs_residuals.data();
     double sum_sq = 0.0;
     for (size_t c = 0; c < cameras.size(); ++c) {
       const FlowEquations& eq = cameras[c];
@@ -154,12 +155,15 @@ FlowSolution SolveFlow(const std::vector<FlowEquations>& cameras,
       tc.head<3>() = (r_cw * twist.head<3>()).cast<float>();
       tc.tail<3>() = (r_cw * twist.tail<3>()).cast<float>();
       weights[c].resize(eq.size());
+      float* res = weights[c].data();  // residuals for now, turned into weights below
+      double camera_sum_sq = 0.0;     // a local, so that it stays in a register
       for (int i = 0; i < eq.size(); ++i) {
         const float r = (eq.rows[i].dot(tc) - eq.rhs[i]) * eq.inv_grad_norm[i];
-        weights[c][i] = r;  // residual for now, turned into a weight below
-        abs_residuals.push_back(std::abs(r));
-        sum_sq += double(r) * r;
+        res[i] = r;
+        *abs_out++ = std::abs(r);
+        camera_sum_sq += double(r) * r;
       }
+      sum_sq += camera_sum_sq;
     }
     out.final_rms_px = std::sqrt(sum_sq / out.equations);
     if (pass + 1 == solves) break;
