@@ -29,7 +29,7 @@ struct PyramidOptions {
   // the number of levels follows the object's on-screen size (3.3).
   double min_object_px = 32.0;
   int max_iterations_per_level = 6;  // render-solve-update rounds per level (3.9)
-  double min_update_px = 0.05;    // a level is done when an update moves the object less, px
+  double min_update_px = 0.1;     // a level is done when an update moves the object less, px
   // Coarser levels (level > 0) only need to bring the pose within the capture range of the
   // next finer level, so they stop earlier: at most this many rounds, and once an update
   // moves the object less than coarse_min_update_px (pixels of that level). Each round
