@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include <nlohmann/json.hpp>
 
 #include "tools/unseen/commands.h"
@@ -23,6 +25,7 @@
 #include "unseen/track/tracker.h"
 #include "unseen/util/error.h"
 #include "unseen/util/logging.h"
+#include "unseen/util/progress.h"
 #include "unseen/util/timer.h"
 
 namespace unseen::cli {
@@ -127,6 +130,8 @@ void RunTrack(const TrackArgs& args) {
   double sum_process_ms = 0.0;
   int lost = 0, gt_frames = 0;
   double sum_t_mm = 0, max_t_mm = 0, sum_r_deg = 0, max_r_deg = 0;
+  // Frames done, fps and ETA on stderr, when it is a terminal (logs stay clean).
+  ProgressLine progress("track", frames, isatty(fileno(stderr)) != 0);
   for (int i = 0; i < frames; ++i) {
     const Frame frame = sequence.ReadFrame(args.first_frame + i);
     Timer timer;
@@ -156,7 +161,9 @@ void RunTrack(const TrackArgs& args) {
       error_text = fmt::format(" err {:.2f} mm {:.3f} deg", t_mm, r_deg);
     }
     UNSEEN_LOG_DEBUG("frame {}:{} {}", frame.frame_id, error_text, r.BriefReport());
+    progress.Update(i + 1);
   }
+  progress.Finish();
 
   const double fps = sum_process_ms > 0 ? 1e3 * frames / sum_process_ms : 0.0;
   const int ncam = sequence.rig().size();
