@@ -275,9 +275,9 @@ std::vector<Run> PlanRuns(const BenchArgs& args, const std::vector<std::string>&
     // The globe of the scene (25 x 50 quads, ~2 400 triangles) against the same sphere and
     // texture tessellated into ~100 000 triangles.
     const Scene scene = LoadScene(args.scenes_dir + "/globe_spin.yaml");
-    for (int segments : {50, 224}) {
+    for (const auto& [rings, segments] : {std::pair{25, 50}, std::pair{224, 224}}) {
       ObjectSpec spec = scene.object;
-      spec.rings = segments / 2;
+      spec.rings = rings;
       spec.segments = segments;
       const Mesh mesh = BuildObjectMesh(spec);
       add({"model_size", fmt::format("globe_spin {} triangles", mesh.num_triangles()), seq,
