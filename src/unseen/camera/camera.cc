@@ -15,6 +15,16 @@ PixelRect PixelRect::Intersect(const PixelRect& o) const {
   return r;
 }
 
+PinholeCamera PinholeCamera::Centered(int width, int height, double focal_px) {
+  PinholeCamera c;
+  c.width = width;
+  c.height = height;
+  c.fx = c.fy = focal_px;
+  c.cx = 0.5 * (width - 1);
+  c.cy = 0.5 * (height - 1);
+  return c;
+}
+
 void PinholeCamera::Check(const std::string& what) const {
   UNSEEN_CHECK(width > 0 && height > 0, "{}: image size {}x{} must be positive", what, width,
                height);

@@ -37,6 +37,10 @@ struct PinholeCamera {
   double cx = 0.0, cy = 0.0;  // principal point, px (pixel-centre convention)
   std::vector<double> distortion;  // OpenCV order; empty = none
 
+  // A camera of `width` x `height` px with square pixels of focal length `focal_px` and the
+  // principal point at the image centre ((width - 1) / 2, (height - 1) / 2), no distortion.
+  static PinholeCamera Centered(int width, int height, double focal_px);
+
   // Throws unseen::Error naming `what` for non-positive size/focal length, NaN, or a
   // distortion vector whose length is not 4, 5, 8, 12 or 14.
   void Check(const std::string& what = "camera") const;

@@ -8,15 +8,7 @@
 namespace unseen {
 namespace {
 
-PinholeCamera ThesisCamera() {
-  PinholeCamera c;
-  c.width = 512;
-  c.height = 256;
-  c.fx = c.fy = 837.3;
-  c.cx = 255.5;
-  c.cy = 127.5;
-  return c;
-}
+PinholeCamera ThesisCamera() { return PinholeCamera::Centered(512, 256, 837.3); }
 
 TEST(PinholeCamera, ProjectUnprojectRoundTrip) {
   const PinholeCamera c = ThesisCamera();

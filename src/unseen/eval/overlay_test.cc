@@ -15,15 +15,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-PinholeCamera TestCamera() {
-  PinholeCamera c;
-  c.width = 320;
-  c.height = 240;
-  c.fx = c.fy = 300.0;
-  c.cx = 159.5;
-  c.cy = 119.5;
-  return c;
-}
+PinholeCamera TestCamera() { return PinholeCamera::Centered(320, 240, 300.0); }
 
 Rigid3d CubePose() {
   return Rigid3d(ExpSO3(Eigen::Vector3d(0.4, 0.6, 0.2)), Eigen::Vector3d(0.02, 0.03, 0.6));

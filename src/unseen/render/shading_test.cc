@@ -15,15 +15,7 @@
 namespace unseen {
 namespace {
 
-PinholeCamera TestCamera() {
-  PinholeCamera c;
-  c.width = 160;
-  c.height = 120;
-  c.fx = c.fy = 100.0;
-  c.cx = 79.5;
-  c.cy = 59.5;
-  return c;
-}
+PinholeCamera TestCamera() { return PinholeCamera::Centered(160, 120, 100.0); }
 
 // A camera-facing square (normal -z) of half-size h centred on (x, y, z), appended to
 // `mesh` with material `material`.

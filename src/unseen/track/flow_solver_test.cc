@@ -39,15 +39,7 @@ FlowEquations MakeEquations(const PinholeCamera& cam, const Rigid3d& world_from_
   return eq;
 }
 
-PinholeCamera Camera() {
-  PinholeCamera cam;
-  cam.width = 512;
-  cam.height = 256;
-  cam.fx = cam.fy = 837.3;
-  cam.cx = 255.5;
-  cam.cy = 127.5;
-  return cam;
-}
+PinholeCamera Camera() { return PinholeCamera::Centered(512, 256, 837.3); }
 
 TEST(FlowSolver, RecoversTheTwistFromExactEquations) {
   std::mt19937 rng(3);

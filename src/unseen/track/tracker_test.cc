@@ -20,15 +20,7 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-PinholeCamera Camera512() {
-  PinholeCamera cam;
-  cam.width = 512;
-  cam.height = 256;
-  cam.fx = cam.fy = 837.3;
-  cam.cx = 255.5;
-  cam.cy = 127.5;
-  return cam;
-}
+PinholeCamera Camera512() { return PinholeCamera::Centered(512, 256, 837.3); }
 
 Rig OneCameraRig() {
   Rig rig;
