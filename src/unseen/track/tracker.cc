@@ -48,10 +48,10 @@ std::string SolveSummary::BriefReport() const {
     iters += fmt::format("{}{}", iters.empty() ? "" : "/", iterations_per_level[l]);
   }
   return fmt::format(
-      "levels {} iters {} | px cand {} grad- {} occ- {}/{}/{} undir- {} flow- {} used {} "
+      "levels {} iters {} renders {} | px cand {} grad- {} occ- {}/{}/{} undir- {} flow- {} used {} "
       "(share {:.2f}) | res {:.3f}->{:.3f} px, last upd {:.3f} px, corr {:.1f} px{} | ms "
       "pred {:.3f} rend {:.3f} pre {:.3f} sel {:.3f} solve {:.3f} total {:.3f}",
-      num_levels, iters, counts.candidates, counts.rejected_gradient,
+      num_levels, iters, renders, counts.candidates, counts.rejected_gradient,
       counts.rejected_input_gradient, counts.rejected_direction, counts.rejected_magnitude,
       counts.rejected_undirected, counts.rejected_normal_flow, counts.used, share,
       initial_residual_px, final_residual_px, last_update_px, correction_px,
@@ -109,6 +109,7 @@ void Tracker::Initialize(const Rigid3d& world_from_obj) {
   last_good_ = world_from_obj;
   status_ = TrackStatus::kTracking;
   bad_frames_ = 0;
+  recent_correction_px_ = std::numeric_limits<double>::infinity();
   initialized_ = true;
 }
 
@@ -398,13 +399,15 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
                                           : std::min(po.max_iterations_per_level,
                                                      po.coarse_max_iterations);
     const double min_update_px = level == 0 ? po.min_update_px : po.coarse_min_update_px;
+    SelectionCounts counts;
     for (int iteration = 0; iteration < max_iterations; ++iteration) {
-      SelectionCounts counts;
+      counts = SelectionCounts();
+      ++s.renders;
       for (int c = 0; c < ncam; ++c) {
         CameraWork& w = *work_[c];
+        const Rigid3d cam_from_obj = cam_from_world_[c] * pose;
         equations[c].Clear();
         if (!w.active) continue;
-        const Rigid3d cam_from_obj = cam_from_world_[c] * pose;
         if (!RenderVirtual(cam_from_obj, level < po.supersampled_levels, level, &w, &s.times)) continue;
         timer.Restart();
         Preprocess(w.composite, options_.preprocess, level, true, &w.virtual_pre);
@@ -478,6 +481,41 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
   return result;
 }
 
+TrackResult Tracker::AlignPredicted(const std::vector<cv::Mat>& images,
+                                    const Rigid3d& predicted) {
+  const PyramidOptions& po = options_.pyramid;
+  const double trust = options_.failure.trust_confidence;
+  const int full = NumLevelsFor(predicted);
+  int levels = full;
+  if (po.adaptive_levels && status_ == TrackStatus::kTracking) {
+    // Each coarser level doubles the capture range (3.3).
+    const double expected_px = po.prediction_margin * recent_correction_px_;
+    levels = std::min(full, po.min_adaptive_levels);
+    while (levels < full && expected_px > po.capture_px * double(1 << (levels - 1))) ++levels;
+  }
+  TrackResult r = AlignChecked(images, predicted, levels);
+  const double reach_px = po.capture_px * double(1 << (levels - 1));
+  if (levels < full && (r.confidence < trust || r.summary.correction_px > 0.75 * reach_px)) {
+    TrackResult with_all = AlignChecked(images, predicted, full);
+    const StageTimes both = [&] {
+      StageTimes t = r.summary.times;
+      t += with_all.summary.times;
+      return t;
+    }();
+    if (with_all.confidence >= r.confidence) r = std::move(with_all);
+    r.summary.times = both;
+  }
+  if (r.confidence >= trust) {
+    const double decayed = std::isfinite(recent_correction_px_)
+                               ? po.correction_decay * recent_correction_px_
+                               : 0.0;
+    recent_correction_px_ = std::max(r.summary.correction_px, decayed);
+  } else {
+    recent_correction_px_ = std::numeric_limits<double>::infinity();
+  }
+  return r;
+}
+
 TrackResult Tracker::Track(const std::vector<cv::Mat>& images_per_camera) {
   UNSEEN_CHECK(initialized_, "Tracker::Track called before Initialize()");
   Timer total;
@@ -489,7 +527,7 @@ TrackResult Tracker::Track(const std::vector<cv::Mat>& images_per_camera) {
       status_ == TrackStatus::kLost ? last_good_ : predictor_->Predict(options_.frame_interval_s);
   const double predict_ms = timer.ElapsedMilliseconds();
 
-  TrackResult r = AlignChecked(images, predicted, 0);
+  TrackResult r = AlignPredicted(images, predicted);
   if (status_ == TrackStatus::kLost && f.search_when_lost && r.confidence < f.recover_confidence) {
     // Local search around the last good pose (3.9): shifted starts along each world axis.
     const double step = f.search_offset * sphere_radius_;

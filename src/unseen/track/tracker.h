@@ -8,6 +8,7 @@
 // judge the result (confidence, status) and re-acquire a lost object (3.9).
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -36,7 +37,8 @@ struct StageTimes {
 // What the alignment of one frame did.
 struct SolveSummary {
   int num_levels = 0;                    // pyramid levels used
-  std::vector<int> iterations_per_level; // index = level (0 = full resolution)
+  std::vector<int> iterations_per_level; // solves; index = level (0 = full resolution)
+  int renders = 0;                       // render-solve rounds over all levels
   SelectionCounts counts;                // last round at the finest level, all cameras
   int equations = 0;                     // equations of that round
   double initial_residual_px = 0.0;      // RMS normal flow |It|/|grad| before its update
@@ -100,6 +102,9 @@ class Tracker {
   std::vector<cv::Mat> CheckImages(const std::vector<cv::Mat>& images) const;
   TrackResult AlignChecked(const std::vector<cv::Mat>& images, const Rigid3d& start,
                            int num_levels);
+  // The alignment of a frame from the predicted pose, with the pyramid depth the recent
+  // corrections call for (PyramidOptions::adaptive_levels).
+  TrackResult AlignPredicted(const std::vector<cv::Mat>& images, const Rigid3d& predicted);
   double Confidence(const SolveSummary& summary) const;
   // Renders the model into `work`'s region at `cam_from_obj` and composes the virtual image
   // (input with the render over it), its mask and depth; false when nothing was rendered.
@@ -124,6 +129,8 @@ class Tracker {
   TrackStatus status_ = TrackStatus::kTracking;
   int bad_frames_ = 0;
   Rigid3d last_good_;
+  // Decaying maximum of the recent corrections, level-0 pixels (infinite: unknown).
+  double recent_correction_px_ = std::numeric_limits<double>::infinity();
 };
 
 }  // namespace unseen

@@ -28,6 +28,15 @@ void PyramidOptions::Check() const {
   UNSEEN_CHECK(max_step_px > 0.0 && std::isfinite(max_step_px),
                "pyramid.max_step_px {} must be > 0", max_step_px);
   UNSEEN_CHECK(rim_px >= 0 && rim_px <= 20, "pyramid.rim_px {} must be in [0, 20]", rim_px);
+  UNSEEN_CHECK(min_adaptive_levels >= 1 && min_adaptive_levels <= max_levels,
+               "pyramid.min_adaptive_levels {} must be in [1, max_levels = {}]",
+               min_adaptive_levels, max_levels);
+  UNSEEN_CHECK(capture_px > 0.0 && std::isfinite(capture_px),
+               "pyramid.capture_px {} must be > 0", capture_px);
+  UNSEEN_CHECK(prediction_margin >= 1.0 && std::isfinite(prediction_margin),
+               "pyramid.prediction_margin {} must be >= 1", prediction_margin);
+  UNSEEN_CHECK(correction_decay >= 0.0 && correction_decay < 1.0,
+               "pyramid.correction_decay {} must be in [0, 1)", correction_decay);
   UNSEEN_CHECK(supersampled_levels >= 0 && supersampled_levels <= 8,
                "pyramid.supersampled_levels {} must be in [0, 8]", supersampled_levels);
 }
@@ -154,7 +163,12 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"coarse_min_update_px", Field(&py.coarse_min_update_px)},
         {"max_step_px", Field(&py.max_step_px)},
         {"rim_px", Field(&py.rim_px)},
-        {"supersampled_levels", Field(&py.supersampled_levels)}}},
+        {"supersampled_levels", Field(&py.supersampled_levels)},
+        {"adaptive_levels", Field(&py.adaptive_levels)},
+        {"min_adaptive_levels", Field(&py.min_adaptive_levels)},
+        {"capture_px", Field(&py.capture_px)},
+        {"prediction_margin", Field(&py.prediction_margin)},
+        {"correction_decay", Field(&py.correction_decay)}}},
       {"predictor",
        {{"type", EnumField(&pr.type, &ParsePredictorType)},
         {"linear_accel_sigma", Field(&pr.linear_accel_sigma)},

@@ -7,7 +7,8 @@
 //   selection:  {color_mode: redundancy, min_gradient_sq: 984e-6, max_normal_flow_px: 1.22,
 //                use_occlusion_rejection: true, ...}
 //   solver:     {kernel: huber, kernel_width: 1.345, irls_iterations: 2}
-//   pyramid:    {max_levels: 4, min_object_px: 32, max_iterations_per_level: 6}
+//   pyramid:    {max_levels: 4, min_object_px: 32, max_iterations_per_level: 6,
+//                adaptive_levels: true}
 //   predictor:  {type: kalman, linear_accel_sigma: 2.0}
 //   failure:    {lost_confidence: 0.3, lost_after_frames: 3, recover_confidence: 0.5}
 //   frame_interval_s: 0.0333
@@ -42,6 +43,17 @@ struct PyramidOptions {
   // area-averaged silhouette and texture of a camera image (a point-sampled silhouette pasted
   // over the input biases the pose outwards by about a quarter pixel).
   int supersampled_levels = 8;
+  // While tracking, use only as many levels as the expected prediction error needs: the
+  // finest level captures about capture_px pixels and each coarser one doubles that; the
+  // expected error is prediction_margin times the largest recent correction (a maximum
+  // that decays by correction_decay per frame). A doubtful result (confidence below
+  // FailureOptions::trust_confidence, or a correction near the reach of the levels used) is
+  // redone with the full pyramid. false: always the full pyramid (the thesis).
+  bool adaptive_levels = true;
+  int min_adaptive_levels = 2;  // but never fewer levels than this (coarse levels smooth the cost)
+  double capture_px = 2.0;
+  double prediction_margin = 2.0;
+  double correction_decay = 0.8;
   void Check() const;
 };
 

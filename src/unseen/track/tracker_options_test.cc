@@ -28,7 +28,7 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
       "preprocess: {use_linf: false, blur_sigma_px: 2.5}\n"
       "selection: {color_mode: raw, use_occlusion_rejection: false}\n"
       "solver: {kernel: tukey, kernel_width: 4.685}\n"
-      "pyramid: {max_levels: 2}\n"
+      "pyramid: {max_levels: 2, adaptive_levels: false, min_adaptive_levels: 1, capture_px: 3}\n"
       "predictor: {type: none}\n"
       "failure: {lost_after_frames: 5}\n"
       "frame_interval_s: 0.04\n");
@@ -38,6 +38,9 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
   EXPECT_FALSE(o.selection.use_occlusion_rejection);
   EXPECT_EQ(o.solver.kernel, RobustKernel::kTukey);
   EXPECT_EQ(o.pyramid.max_levels, 2);
+  EXPECT_FALSE(o.pyramid.adaptive_levels);
+  EXPECT_EQ(o.pyramid.min_adaptive_levels, 1);
+  EXPECT_EQ(o.pyramid.capture_px, 3.0);
   EXPECT_EQ(o.predictor.type, PredictorType::kHold);
   EXPECT_EQ(o.failure.lost_after_frames, 5);
   EXPECT_DOUBLE_EQ(o.frame_interval_s, 0.04);
@@ -57,6 +60,8 @@ TEST(TrackerOptions, RejectsBadFilesNamingTheKey) {
   EXPECT_NE(message("colour: {}").find("colour"), std::string::npos);
   EXPECT_NE(message("pyramid: {max_levels: two}").find("pyramid.max_levels"), std::string::npos);
   EXPECT_NE(message("pyramid: {max_levels: 0}").find("max_levels"), std::string::npos);
+  EXPECT_NE(message("pyramid: {max_levels: 2, min_adaptive_levels: 3}").find("min_adaptive_levels"),
+            std::string::npos);
   EXPECT_NE(message("selection: {color_mode: hsv}").find("hsv"), std::string::npos);
   EXPECT_NE(message("a: [").find("t.yaml"), std::string::npos);
   EXPECT_THROW(LoadTrackerOptions("/nonexistent/tracker.yaml"), Error);

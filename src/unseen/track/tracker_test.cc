@@ -225,6 +225,32 @@ TEST(TrackerMultiCamera, TwoCamerasBeatOneOnDepth) {
   EXPECT_LT(depth_error_both, depth_error_one) << rb.BriefReport() << "\n" << ro.BriefReport();
 }
 
+TEST_F(TrackerScene, AdaptivePyramidUsesFewerLevelsForSmallMotionsAndAllForAJump) {
+  Tracker tracker(rig_, cube_);
+  tracker.Initialize(truth_);
+  const cv::Mat background = Background(rig_.cameras[0].intrinsics, 1);
+  const int full = tracker.NumLevelsFor(truth_);
+  ASSERT_EQ(full, 3);
+  // Steady motion of 1 mm a frame (~0.8 px): the predictor follows it, the corrections are
+  // small, so fewer levels suffice.
+  Rigid3d pose = truth_;
+  int fewer = 0;
+  for (int k = 1; k <= 10; ++k) {
+    pose = Rigid3d(truth_.rotation(), truth_.translation() + Eigen::Vector3d(0.001 * k, 0, 0));
+    const TrackResult r = tracker.Track({Synthesize(cube_, rig_.cameras[0], pose, background)});
+    EXPECT_LT(Difference(r.world_from_obj, pose).translation, 0.001) << r.BriefReport();
+    if (k > 3 && r.summary.num_levels < full) ++fewer;
+  }
+  EXPECT_GE(fewer, 5);
+  // A sudden jump of 12 mm (~10 px, beyond two levels' reach) is still aligned: the doubtful
+  // reduced alignment is redone with the whole pyramid.
+  const Rigid3d jumped(pose.rotation(), pose.translation() + Eigen::Vector3d(0.001, 0.012, 0));
+  const TrackResult r = tracker.Track({Synthesize(cube_, rig_.cameras[0], jumped, background)});
+  EXPECT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
+  EXPECT_LT(Difference(r.world_from_obj, jumped).translation, 0.001) << r.BriefReport();
+  EXPECT_EQ(r.summary.num_levels, full) << r.BriefReport();
+}
+
 TEST_F(TrackerScene, ObjectLeavingTheViewIsReportedLost) {
   Tracker tracker(rig_, cube_);
   tracker.Initialize(truth_);
