@@ -95,14 +95,7 @@ RunOutcome Execute(const Run& run, int max_frames) {
     track_seconds += seconds;
     out.mean_times += result.summary.times;
     out.mean_pixels += result.summary.equations;
-    PoseRecord record;
-    record.frame = frame.frame_id;
-    record.time_s = frame.time_s;
-    record.status = result.status;
-    record.confidence = result.confidence;
-    record.world_from_obj = result.world_from_obj;
-    record.process_ms = 1e3 * seconds;
-    poses.push_back(record);
+    poses.push_back(result.ToPoseRecord(frame.frame_id, frame.time_s, 1e3 * seconds));
   }
   std::vector<GroundTruthFrame> truth = SequenceGroundTruth(sequence);
   truth.resize(std::min<size_t>(truth.size(), n));

@@ -139,13 +139,7 @@ void RunTrack(const TrackArgs& args) {
     const double ms = timer.ElapsedMilliseconds();
     sum_process_ms += ms;
     sum_times += r.summary.times;
-    PoseRecord record;
-    record.frame = frame.frame_id;
-    record.time_s = frame.time_s;
-    record.status = r.status;
-    record.confidence = r.confidence;
-    record.world_from_obj = r.world_from_obj;
-    record.process_ms = ms;
+    const PoseRecord record = r.ToPoseRecord(frame.frame_id, frame.time_s, ms);
     if (writer) writer->Write(record);
     records.push_back(record);
     if (r.status != TrackStatus::kTracking) ++lost;

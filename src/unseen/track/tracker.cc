@@ -65,6 +65,18 @@ std::string TrackResult::BriefReport() const {
                      world_from_obj.ToString(), summary.BriefReport());
 }
 
+PoseRecord TrackResult::ToPoseRecord(int frame, double time_s,
+                                     std::optional<double> process_ms) const {
+  PoseRecord record;
+  record.frame = frame;
+  record.time_s = time_s;
+  record.status = status;
+  record.confidence = confidence;
+  record.world_from_obj = world_from_obj;
+  record.process_ms = process_ms;
+  return record;
+}
+
 // Buffers of one camera, reused from frame to frame.
 struct Tracker::CameraWork {
   bool active = false;

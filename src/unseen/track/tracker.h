@@ -10,6 +10,7 @@
 
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,9 @@ struct TrackResult {
   double confidence = 0.0;  // [0, 1]
   SolveSummary summary;
   std::string BriefReport() const;
+  // The pose-stream record of this result for frame `frame` at `time_s` (seconds).
+  PoseRecord ToPoseRecord(int frame, double time_s,
+                          std::optional<double> process_ms = std::nullopt) const;
 };
 
 class Tracker {
