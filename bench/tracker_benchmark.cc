@@ -15,6 +15,7 @@
 #include <fstream>
 #include <functional>
 #include <optional>
+#include <ctime>
 #include <thread>
 #include <string>
 #include <vector>
@@ -67,6 +68,9 @@ struct RunOutcome {
   double fps = 0.0;        // frames / seconds spent in Tracker::Track
   StageTimes mean_times;   // mean per frame
   double mean_pixels = 0;  // mean equations per frame at the finest level
+  double mean_renders = 0; // render-solve rounds per frame, all levels
+  double mean_levels = 0;  // pyramid levels per frame
+  double cpu_ms = 0;       // process CPU time per frame in Tracker::Track (all threads)
 };
 
 RunOutcome Execute(const Run& run, int max_frames) {
@@ -76,7 +80,9 @@ RunOutcome Execute(const Run& run, int max_frames) {
   UNSEEN_CHECK(sequence.has_ground_truth(), "{}: the benchmark needs ground truth",
                run.sequence_dir);
   Mesh model = run.model ? run.model(sequence) : sequence.LoadModel();
-  Tracker tracker(sequence.rig(), std::move(model), run.options);
+  TrackerOptions options = run.options;
+  options.threads = run.threads;
+  Tracker tracker(sequence.rig(), std::move(model), options);
   const auto start = sequence.GroundTruth(0);
   UNSEEN_CHECK(start.has_value(), "{}: frame 0 has no ground truth", run.sequence_dir);
   tracker.Initialize(*start);
@@ -87,14 +93,19 @@ RunOutcome Execute(const Run& run, int max_frames) {
   poses.reserve(n);
   RunOutcome out;
   double track_seconds = 0.0;
+  std::clock_t cpu_ticks = 0;
   for (int i = 0; i < n; ++i) {
     const Frame frame = sequence.ReadFrame(i);
+    const std::clock_t cpu_start = std::clock();
     Timer timer;
     const TrackResult result = tracker.Track(frame.images);
     const double seconds = timer.ElapsedSeconds();
+    cpu_ticks += std::clock() - cpu_start;
     track_seconds += seconds;
     out.mean_times += result.summary.times;
     out.mean_pixels += result.summary.equations;
+    out.mean_renders += result.summary.renders;
+    out.mean_levels += result.summary.num_levels;
     poses.push_back(result.ToPoseRecord(frame.frame_id, frame.time_s, 1e3 * seconds));
   }
   std::vector<GroundTruthFrame> truth = SequenceGroundTruth(sequence);
@@ -111,6 +122,9 @@ RunOutcome Execute(const Run& run, int max_frames) {
   t.solve_ms *= k;
   t.total_ms *= k;
   out.mean_pixels *= k;
+  out.mean_renders *= k;
+  out.mean_levels *= k;
+  out.cpu_ms = 1e3 * double(cpu_ticks) / CLOCKS_PER_SEC * k;
   return out;
 }
 
@@ -123,6 +137,9 @@ nlohmann::json ToJson(const Run& run, const RunOutcome& o) {
   j["frames_tracked"] = o.frames;
   j["fps_track_only"] = o.fps;
   j["mean_equations"] = o.mean_pixels;
+  j["mean_renders"] = o.mean_renders;
+  j["mean_levels"] = o.mean_levels;
+  j["cpu_ms_per_frame"] = o.cpu_ms;
   j["stage_ms"] = {{"predict", o.mean_times.predict_ms},   {"render", o.mean_times.render_ms},
                    {"preprocess", o.mean_times.preprocess_ms},
                    {"select", o.mean_times.select_ms}, {"solve", o.mean_times.solve_ms},
@@ -135,22 +152,24 @@ std::string Row(const Run& run, const RunOutcome& o) {
   const EvaluationResult& e = o.eval;
   const bool any = e.scored_frames > 0;
   return fmt::format(
-      "{:<34} {:>2} {:>5.1f}% {:>4} {:>7} {:>7} {:>7} {:>6} {:>6} {:>7.0f} {:>5.2f} {:>5.2f} "
-      "{:>5.2f}  {}",
+      "{:<34} {:>2} {:>5.1f}% {:>4} {:>7} {:>7} {:>7} {:>6} {:>6} {:>7.0f} {:>5.2f} {:>4.1f} "
+      "{:>5.2f} {:>5.2f} {:>5.2f}  {}",
       run.name, run.threads, 100.0 * e.success_rate, e.lost_frames,
       any ? fmt::format("{:.2f}", e.trans_err_mm.mean) : "-",
       any ? fmt::format("{:.2f}", e.trans_err_mm.rms) : "-",
       any ? fmt::format("{:.1f}", e.trans_err_mm.max) : "-",
       any ? fmt::format("{:.2f}", e.rot_err_deg.mean) : "-",
-      any ? fmt::format("{:.2f}", e.rot_err_deg.max) : "-", o.fps, o.mean_times.render_ms,
+      any ? fmt::format("{:.2f}", e.rot_err_deg.max) : "-", o.fps, o.cpu_ms, o.mean_renders,
+      o.mean_times.render_ms,
       o.mean_times.preprocess_ms + o.mean_times.select_ms, o.mean_times.solve_ms, run.thesis);
 }
 
 std::string Header() {
   return fmt::format(
-      "{:<34} {:>2} {:>6} {:>4} {:>7} {:>7} {:>7} {:>6} {:>6} {:>7} {:>5} {:>5} {:>5}  {}",
-      "run", "th", "5cm5°", "lost", "mean_mm", "rms_mm", "max_mm", "mean°", "max°", "fps",
-      "rend", "sel", "solve", "thesis");
+      "{:<34} {:>2} {:>6} {:>4} {:>7} {:>7} {:>7} {:>6} {:>6} {:>7} {:>5} {:>4} {:>5} {:>5} {:>5}  "
+      "{}",
+      "run", "th", "5cm5°", "lost", "mean_mm", "rms_mm", "max_mm", "mean°", "max°", "fps", "cpu",
+      "rnd", "rend", "sel", "solve", "thesis");
 }
 
 // Renders scenes/<name>.yaml into work/<name> unless it is there and newer than the scene.

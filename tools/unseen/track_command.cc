@@ -44,6 +44,7 @@ struct TrackArgs {
   std::string overlay;
   int first_frame = 0;
   int max_frames = 0;
+  int threads = -1;  // -1: as the options say
 };
 
 std::vector<std::string> SplitComma(const std::string& text) {
@@ -89,8 +90,12 @@ void RunTrack(const TrackArgs& args) {
   Sequence sequence = Sequence::Open(args.sequence);
   const std::string reference_name = sequence.rig().cameras.at(sequence.reference_camera()).name;
   if (!args.cameras.empty()) sequence.SelectCameras(SplitComma(args.cameras));
-  const TrackerOptions options =
+  TrackerOptions options =
       args.config.empty() ? TrackerOptions() : LoadTrackerOptions(args.config);
+  if (args.threads >= 0) {
+    options.threads = args.threads;
+    options.Check();
+  }
 
   Mesh model;
   if (args.model.empty()) {
@@ -219,6 +224,8 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_option("--first-frame", args->first_frame,
                   "Start at this frame index (--init gt takes its ground truth)");
   cmd->add_option("--max-frames", args->max_frames, "Track at most N frames");
+  cmd->add_option("--threads", args->threads,
+                  "Threads per frame (overrides the options' 'threads'; 0 = all cores)");
   cmd->callback([args] { RunTrack(*args); });
 }
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <Eigen/Geometry>
+#include <omp.h>
 #if defined(__SSE2__)
 #include <immintrin.h>
 #endif
@@ -18,6 +19,8 @@
 namespace unseen {
 
 void RenderOptions::Check() const {
+  UNSEEN_CHECK(threads >= 0 && threads <= 256, "RenderOptions.threads = {} must be in [0, 256]",
+               threads);
   UNSEEN_CHECK(std::isfinite(near_m) && near_m > 0.0,
                "RenderOptions.near_m = {} must be positive and finite (metres)", near_m);
 }
@@ -25,6 +28,8 @@ void RenderOptions::Check() const {
 namespace {
 
 constexpr int kSubpixelBits = 8;
+// Regions smaller than this (pixels) are resolved on one thread: not worth the fork.
+constexpr int kParallelResolvePixels = 8192;
 constexpr int64_t kSubpixel = 1 << kSubpixelBits;  // screen positions snap to 1/256 px
 constexpr double kGuardPx = 4096.0;  // triangles are clipped to the image grown by this
 constexpr int kMaxImageSide = 32768;  // keeps snapped coordinates in int32
@@ -651,12 +656,12 @@ class Shader {
   int color_tri_ = -1;
   Kind kind_ = Kind::kConstant, fallback_kind_ = Kind::kConstant;
   const TextureView* texture_ = nullptr;
-  Eigen::Vector2f uv0_, duv1_, duv2_;
-  Eigen::Vector3f c0_, dc1_, dc2_;
-  Eigen::Vector3f p0_, dp1_, dp2_, face_normal_;
+  Eigen::Vector2f uv0_ = Eigen::Vector2f::Zero(), duv1_ = uv0_, duv2_ = uv0_;
+  Eigen::Vector3f c0_ = Eigen::Vector3f::Zero(), dc1_ = c0_, dc2_ = c0_;
+  Eigen::Vector3f p0_ = c0_, dp1_ = c0_, dp2_ = c0_, face_normal_ = c0_;
   // The triangle prepared for Normal().
   int normal_tri_ = -1;
-  Eigen::Vector3f n0_, dn1_, dn2_;
+  Eigen::Vector3f n0_ = Eigen::Vector3f::Zero(), dn1_ = n0_, dn2_ = n0_;
 };
 
 // z[i] = z[i] > 0 ? 1 / z[i] : 0.
@@ -850,55 +855,63 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
   }
   cv::compare(out->depth, 0.0f, out->mask, cv::CMP_GT);  // 255 where covered
   for (int y = 0; y < size.height; ++y) InvertPositive(out->depth.ptr<float>(y), size.width);
-  Shader shader(mesh, textures);
   const Eigen::Matrix3f rotation = cam_from_obj.RotationMatrix().cast<float>();
   const int width = size.width;
-  for (int y = 0; y < size.height; ++y) {
-    float* z = out->depth.ptr<float>(y);
-    uint8_t* m = out->mask.ptr<uint8_t>(y);
-    if (options.write_triangle_ids) {
-      int32_t* id = ids.ptr<int32_t>(y);
-      for (int x = 0; x < width; ++x) id[x] = m[x] ? id[x] : -1;
-    }
-    if (options.write_color) {
-      float* color = out->color.ptr<float>(y);
-      const float* w = out->scratch_weights.ptr<float>(y);
-      const int32_t* id = need_ids ? ids.ptr<int32_t>(y) : nullptr;
-      if (uv_mode) {
-        const TextureView* views = shader.textures();
-        const std::vector<int>& materials = mesh.triangle_materials;
-        for (int x = 0; x < width; ++x) {
-          if (!m[x]) {
-            color[3 * x] = color[3 * x + 1] = color[3 * x + 2] = 0.0f;
-            continue;
+  // Rows are independent; the shader caches per-triangle state, so one per thread. (Inside
+  // an enclosing parallel region, e.g. one render per camera, this runs on one thread.)
+  const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+#pragma omp parallel num_threads(threads) if (threads > 1 && size.area() >= kParallelResolvePixels)
+  {
+    Shader shader(mesh, textures);
+#pragma omp for schedule(static)
+    for (int y = 0; y < size.height; ++y) {
+      float* z = out->depth.ptr<float>(y);
+      uint8_t* m = out->mask.ptr<uint8_t>(y);
+      if (options.write_triangle_ids) {
+        int32_t* id = ids.ptr<int32_t>(y);
+        for (int x = 0; x < width; ++x) id[x] = m[x] ? id[x] : -1;
+      }
+      if (options.write_color) {
+        float* color = out->color.ptr<float>(y);
+        const float* w = out->scratch_weights.ptr<float>(y);
+        const int32_t* id = need_ids ? ids.ptr<int32_t>(y) : nullptr;
+        if (uv_mode) {
+          const TextureView* views = shader.textures();
+          const std::vector<int>& materials = mesh.triangle_materials;
+          for (int x = 0; x < width; ++x) {
+            if (!m[x]) {
+              color[3 * x] = color[3 * x + 1] = color[3 * x + 2] = 0.0f;
+              continue;
+            }
+            const TextureView& texture = single_material ? views[0] : views[materials[id[x]]];
+            SampleWrap(texture, w[2 * x] * z[x], w[2 * x + 1] * z[x], color + 3 * x);
           }
-          const TextureView& texture = single_material ? views[0] : views[materials[id[x]]];
-          SampleWrap(texture, w[2 * x] * z[x], w[2 * x + 1] * z[x], color + 3 * x);
+        } else {
+          for (int x = 0; x < width; ++x) {
+            if (!m[x]) {
+              color[3 * x] = color[3 * x + 1] = color[3 * x + 2] = 0.0f;
+              continue;
+            }
+            shader.Color(id[x], w[2 * x] * z[x], w[2 * x + 1] * z[x], color + 3 * x);
+          }
         }
-      } else {
+      }
+      if (options.write_normals) {
+        float* normal = out->normal.ptr<float>(y);
+        const float* w = out->scratch_weights.ptr<float>(y);
+        const int32_t* id = ids.ptr<int32_t>(y);
+        std::memset(normal, 0, sizeof(float) * 3 * width);
         for (int x = 0; x < width; ++x) {
-          if (!m[x]) {
-            color[3 * x] = color[3 * x + 1] = color[3 * x + 2] = 0.0f;
-            continue;
-          }
-          shader.Color(id[x], w[2 * x] * z[x], w[2 * x + 1] * z[x], color + 3 * x);
+          if (!m[x]) continue;
+          const Eigen::Vector3f n =
+              rotation * shader.Normal(id[x], w[2 * x] * z[x], w[2 * x + 1] * z[x]);
+          normal[3 * x] = n[0];
+          normal[3 * x + 1] = n[1];
+          normal[3 * x + 2] = n[2];
         }
       }
     }
-    if (options.write_normals) {
-      float* normal = out->normal.ptr<float>(y);
-      const float* w = out->scratch_weights.ptr<float>(y);
-      const int32_t* id = ids.ptr<int32_t>(y);
-      std::memset(normal, 0, sizeof(float) * 3 * width);
-      for (int x = 0; x < width; ++x) {
-        if (!m[x]) continue;
-        const Eigen::Vector3f n = rotation * shader.Normal(id[x], w[2 * x] * z[x], w[2 * x + 1] * z[x]);
-        normal[3 * x] = n[0];
-        normal[3 * x + 1] = n[1];
-        normal[3 * x + 2] = n[2];
-      }
-    }
-  }
+  }  // omp parallel
 }
 
 }  // namespace unseen

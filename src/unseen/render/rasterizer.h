@@ -50,6 +50,9 @@ struct RenderOptions {
   // material and render, floor(log2(texels per pixel) / 2) over its drawn triangles.
   bool mipmaps = true;
   double near_m = 1e-3;            // near clipping distance, metres (> 0)
+  // Threads of the shading pass (rows in parallel, for regions of 8 192 pixels or more);
+  // 0: all hardware threads. Inside an enclosing parallel region it runs on one thread.
+  int threads = 1;
   void Check() const;
 };
 

@@ -1,6 +1,7 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/track/pixel_selection.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "unseen/track/flow_jacobian.h"
@@ -85,7 +86,8 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
   SelectionCounts c;
   float row[6];
 
-  for (int y = 0; y < h; ++y) {
+  const int row_end = in.row_end < 0 ? h : std::min(in.row_end, h);
+  for (int y = std::max(in.row_begin, 0); y < row_end; ++y) {
     const uint8_t* reg = in.region->ptr<uint8_t>(y);
     const float* dep = in.depth->ptr<float>(y);
     const float* vb = v.blurred.ptr<float>(y);

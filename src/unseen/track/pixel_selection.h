@@ -68,6 +68,7 @@ struct SelectionInput {
   PixelRect roi;                    // level pixels: buffer (0, 0) is pixel (roi.x0, roi.y0)
   PinholeCamera camera;             // the level's camera
   Eigen::Vector3d origin_in_cam = Eigen::Vector3d::Zero();  // object origin, camera frame
+  int row_begin = 0, row_end = -1;  // buffer rows to select from; -1: to the last row
 };
 
 // Appends the equations of the selected pixels to `out` (rows in the camera frame, see

@@ -137,6 +137,45 @@ TEST(PixelSelection, NormalFlowBoundRejectsLargeMotion) {
   EXPECT_LT(bounded.used, unbounded.used);
 }
 
+TEST(PixelSelection, BandsOfRowsTogetherGiveTheWholeSelection) {
+  const cv::Vec3f dark(0.2f, 0.3f, 0.2f), bright(0.8f, 0.7f, 0.9f);
+  const cv::Mat virtual_image = EdgeImage(64, 48, 30.0, dark, bright);
+  const cv::Mat input_image = EdgeImage(64, 48, 30.4, dark, bright);
+  const cv::Mat depth(48, 64, CV_32FC1, cv::Scalar(1.0f));
+  cv::Mat region(48, 64, CV_8UC1, cv::Scalar(0));
+  region(cv::Rect(8, 8, 48, 32)).setTo(255);
+  PreprocessOptions pre;
+  PreprocessedImage v, i;
+  Preprocess(virtual_image, pre, 0, true, &v);
+  Preprocess(input_image, pre, 0, true, &i);
+  SelectionInput in;
+  in.virtual_image = &v;
+  in.input_image = &i;
+  in.region = &region;
+  in.depth = &depth;
+  in.roi = {0, 0, 64, 48};
+  in.camera = Camera(64, 48);
+  in.origin_in_cam = Eigen::Vector3d(0, 0, 1.0);
+  FlowEquations whole;
+  SelectionCounts whole_counts;
+  SelectPixels(in, PixelSelectionOptions(), &whole, &whole_counts);
+  ASSERT_GT(whole.size(), 32);
+  FlowEquations bands;
+  SelectionCounts band_counts;
+  for (const auto& [begin, end] : {std::pair{0, 17}, std::pair{17, 30}, std::pair{30, -1}}) {
+    in.row_begin = begin;
+    in.row_end = end;
+    SelectPixels(in, PixelSelectionOptions(), &bands, &band_counts);
+  }
+  EXPECT_EQ(band_counts.candidates, whole_counts.candidates);
+  EXPECT_EQ(band_counts.used, whole_counts.used);
+  ASSERT_EQ(bands.size(), whole.size());
+  for (int k = 0; k < whole.size(); ++k) {
+    EXPECT_EQ(bands.rows[k], whole.rows[k]);
+    EXPECT_EQ(bands.rhs[k], whole.rhs[k]);
+  }
+}
+
 TEST(PixelSelection, OptionsAndNames) {
   PixelSelectionOptions o;
   EXPECT_NO_THROW(o.Check());

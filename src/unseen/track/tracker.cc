@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include <fmt/format.h>
+#include <omp.h>
 #include <opencv2/imgproc.hpp>
 
 #include "unseen/image/filters.h"
@@ -86,6 +87,8 @@ struct Tracker::CameraWork {
   cv::Mat mask, depth, coverage;  // virtual image's mask (any coverage), depth, 2x2 count
   PreprocessedImage input_pre, virtual_pre;
   RenderBuffers render;
+  bool virtual_ok = false;  // the last PrepareVirtual rendered something
+  StageTimes times;         // this camera's share of the current alignment
 };
 
 Tracker::Tracker(const Rig& rig, Mesh model, const TrackerOptions& options)
@@ -237,9 +240,11 @@ void Tracker::TransferShading(int level, CameraWork* work) const {
 }
 
 bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int level,
-                            CameraWork* work, StageTimes* times) {
+                            CameraWork* work) const {
   CameraWork& w = *work;
-  const RenderOptions render_options;
+  StageTimes* times = &w.times;
+  RenderOptions render_options;
+  render_options.threads = options_.threads;
   Timer timer;
   const int width = w.roi.width(), height = w.roi.height();
   // The object covers no pixel outside its bounding sphere's rectangle, so only that part
@@ -372,6 +377,31 @@ bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int l
   return true;
 }
 
+bool Tracker::PrepareVirtual(const Rigid3d& cam_from_obj, int level, CameraWork* work) const {
+  CameraWork& w = *work;
+  const PyramidOptions& po = options_.pyramid;
+  if (!RenderVirtual(cam_from_obj, level < po.supersampled_levels, level, &w)) return false;
+  Timer timer;
+  Preprocess(w.composite, options_.preprocess, level, true, &w.virtual_pre);
+  // Mask and its blurred rim; depth of the rim from the nearest surface.
+  if (po.rim_px > 0) {
+    const cv::Mat rim_kernel =
+        cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * po.rim_px + 1, 2 * po.rim_px + 1));
+    cv::dilate(w.mask, w.region, rim_kernel);
+    cv::dilate(w.depth, w.depth_used, rim_kernel);
+    w.depth.copyTo(w.depth_used, w.mask);
+  } else {
+    w.mask.copyTo(w.region);
+    w.depth.copyTo(w.depth_used);
+  }
+  w.region.row(0).setTo(0);
+  w.region.row(w.region.rows - 1).setTo(0);
+  w.region.col(0).setTo(0);
+  w.region.col(w.region.cols - 1).setTo(0);
+  w.times.preprocess_ms += timer.ElapsedMilliseconds();
+  return true;
+}
+
 TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigid3d& start,
                                   int num_levels) {
   const PyramidOptions& po = options_.pyramid;
@@ -382,14 +412,17 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
   s.iterations_per_level.assign(s.num_levels, 0);
   const int margin =
       static_cast<int>(std::ceil(3.0 * options_.preprocess.blur_sigma_px)) + po.rim_px + 2;
-  const cv::Mat rim_kernel =
-      cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * po.rim_px + 1, 2 * po.rim_px + 1));
   const bool input_gradients = options_.selection.use_occlusion_rejection;
-  std::vector<FlowEquations> equations(ncam);
+  const int threads = options_.threads > 0 ? options_.threads : omp_get_max_threads();
+  // Pixel selection runs in bands of rows: one per camera, or one per thread for one camera.
+  const int bands = ncam > 1 ? 1 : threads;
+  std::vector<FlowEquations> equations(ncam * bands);
+  std::vector<SelectionCounts> band_counts(ncam * bands);
+  for (auto& w : work_) w->times = StageTimes();
   Rigid3d pose = start;
 
   for (int level = s.num_levels - 1; level >= 0; --level) {
-    // Region of interest and input pre-processing, once per level (3.5).
+    // Region of interest, once per level (3.5).
     Timer timer;
     for (int c = 0; c < ncam; ++c) {
       CameraWork& w = *work_[c];
@@ -402,7 +435,6 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
       w.roi = rect->Grow(margin).Intersect(LevelRect(cam0.width, cam0.height, level));
       if (w.roi.width() < 8 || w.roi.height() < 8) continue;
       w.input_roi = DownsampledRegion(images[c], level, w.roi);
-      Preprocess(w.input_roi, options_.preprocess, level, input_gradients, &w.input_pre);
       w.active = true;
     }
     s.times.preprocess_ms += timer.ElapsedMilliseconds();
@@ -413,32 +445,34 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
     const double min_update_px = level == 0 ? po.min_update_px : po.coarse_min_update_px;
     SelectionCounts counts;
     for (int iteration = 0; iteration < max_iterations; ++iteration) {
-      counts = SelectionCounts();
       ++s.renders;
-      for (int c = 0; c < ncam; ++c) {
-        CameraWork& w = *work_[c];
-        const Rigid3d cam_from_obj = cam_from_world_[c] * pose;
-        equations[c].Clear();
+      // Independent jobs on the available threads: per camera, the virtual image (render
+      // and its pre-processing) and, in the first round of a level, the input's
+      // pre-processing.
+      const Rigid3d round_pose = pose;
+      const int jobs = (iteration == 0 ? 2 : 1) * ncam;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads > 1 && jobs > 1)
+      for (int j = 0; j < jobs; ++j) {
+        CameraWork& w = *work_[j % ncam];
         if (!w.active) continue;
-        if (!RenderVirtual(cam_from_obj, level < po.supersampled_levels, level, &w, &s.times)) continue;
-        timer.Restart();
-        Preprocess(w.composite, options_.preprocess, level, true, &w.virtual_pre);
-        s.times.preprocess_ms += timer.ElapsedMilliseconds();
-
-        // Mask and its blurred rim; depth of the rim from the nearest surface.
-        timer.Restart();
-        if (po.rim_px > 0) {
-          cv::dilate(w.mask, w.region, rim_kernel);
-          cv::dilate(w.depth, w.depth_used, rim_kernel);
-          w.depth.copyTo(w.depth_used, w.mask);
+        if (j < ncam) {
+          w.virtual_ok = PrepareVirtual(cam_from_world_[j] * round_pose, level, &w);
         } else {
-          w.mask.copyTo(w.region);
-          w.depth.copyTo(w.depth_used);
+          Timer input_timer;
+          Preprocess(w.input_roi, options_.preprocess, level, input_gradients, &w.input_pre);
+          w.times.preprocess_ms += input_timer.ElapsedMilliseconds();
         }
-        w.region.row(0).setTo(0);
-        w.region.row(w.region.rows - 1).setTo(0);
-        w.region.col(0).setTo(0);
-        w.region.col(w.region.cols - 1).setTo(0);
+      }
+      // Pixel selection (4.8)-(4.15), (3.6) in bands of rows.
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) \
+    if (threads > 1 && ncam * bands > 1)
+      for (int j = 0; j < ncam * bands; ++j) {
+        const int c = j / bands, band = j % bands;
+        CameraWork& w = *work_[c];
+        equations[j].Clear();
+        band_counts[j] = SelectionCounts();
+        if (!w.active || !w.virtual_ok) continue;
+        Timer select_timer;
         SelectionInput in;
         in.virtual_image = &w.virtual_pre;
         in.input_image = &w.input_pre;
@@ -446,11 +480,17 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
         in.depth = &w.depth_used;
         in.roi = w.roi;
         in.camera = w.camera;
-        in.origin_in_cam = cam_from_obj.translation();
-        equations[c].world_from_cam_rotation = rig_.cameras[c].world_from_cam.RotationMatrix();
-        SelectPixels(in, options_.selection, &equations[c], &counts);
-        s.times.select_ms += timer.ElapsedMilliseconds();
+        in.origin_in_cam = (cam_from_world_[c] * round_pose).translation();
+        in.row_begin = w.roi.height() * band / bands;
+        in.row_end = w.roi.height() * (band + 1) / bands;
+        equations[j].world_from_cam_rotation = rig_.cameras[c].world_from_cam.RotationMatrix();
+        SelectPixels(in, options_.selection, &equations[j], &band_counts[j]);
+        const double ms = select_timer.ElapsedMilliseconds();
+#pragma omp atomic
+        w.times.select_ms += ms;
       }
+      counts = SelectionCounts();
+      for (const SelectionCounts& b : band_counts) counts += b;
 
       timer.Restart();
       const FlowSolution solution = SolveFlow(equations, options_.solver);
@@ -486,6 +526,7 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
       if (update_px < min_update_px) break;
     }
   }
+  for (const auto& w : work_) s.times += w->times;
   s.correction_px = UpdatePixels(start, TwistBetween(start, pose), 0);
   result.world_from_obj = pose;
   result.confidence = Confidence(s);

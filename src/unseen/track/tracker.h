@@ -112,8 +112,12 @@ class Tracker {
   double Confidence(const SolveSummary& summary) const;
   // Renders the model into `work`'s region at `cam_from_obj` and composes the virtual image
   // (input with the render over it), its mask and depth; false when nothing was rendered.
-  bool RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int level, CameraWork* work,
-                     StageTimes* times);
+  // Touches only `work` (cameras run in parallel).
+  bool RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int level,
+                     CameraWork* work) const;
+  // RenderVirtual, then the virtual image's pre-processing and the region used (mask and
+  // rim) with its depth.
+  bool PrepareVirtual(const Rigid3d& cam_from_obj, int level, CameraWork* work) const;
   // Multiplies the rendered colour of `work`'s virtual image by the low-frequency ratio of
   // input to render over the object's pixels (PreprocessOptions::shading_transfer).
   void TransferShading(int level, CameraWork* work) const;

@@ -73,6 +73,7 @@ void TrackerOptions::Check() const {
   failure.Check();
   UNSEEN_CHECK(frame_interval_s > 0.0 && std::isfinite(frame_interval_s),
                "frame_interval_s {} must be > 0", frame_interval_s);
+  UNSEEN_CHECK(threads >= 0 && threads <= 256, "threads {} must be in [0, 256]", threads);
 }
 
 namespace {
@@ -197,10 +198,14 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
       Field(&o->frame_interval_s)(kv.second, what + ": " + key);
       continue;
     }
+    if (key == "threads") {
+      Field(&o->threads)(kv.second, what + ": " + key);
+      continue;
+    }
     const auto it = sections.find(key);
     if (it == sections.end()) {
       ThrowError("{}: unknown section '{}' (known: preprocess, selection, solver, pyramid, "
-                 "predictor, failure, frame_interval_s)",
+                 "predictor, failure, frame_interval_s, threads)",
                  what, key);
     }
     ApplySection(kv.second, what + ": " + key, it->second);

@@ -12,6 +12,7 @@
 //   predictor:  {type: kalman, linear_accel_sigma: 2.0}
 //   failure:    {lost_confidence: 0.3, lost_after_frames: 3, recover_confidence: 0.5}
 //   frame_interval_s: 0.0333
+//   threads: 1
 #pragma once
 
 #include <string>
@@ -93,6 +94,11 @@ struct TrackerOptions {
   MotionPredictorOptions predictor;
   FailureOptions failure;
   double frame_interval_s = 1.0 / 30.0;  // time between frames for the predictor, s
+  // Threads for one frame: cameras (render, pre-processing, selection) in parallel, and
+  // with one camera the input's pre-processing beside the render, selection in bands of
+  // rows and the render's shading pass. 0: all hardware threads (OpenMP's default). One
+  // thread by default: fine-grained parallel work stalls when another process holds a core.
+  int threads = 1;
   void Check() const;
 };
 

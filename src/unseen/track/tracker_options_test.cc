@@ -31,8 +31,10 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
       "pyramid: {max_levels: 2, adaptive_levels: false, min_adaptive_levels: 1, capture_px: 3}\n"
       "predictor: {type: none}\n"
       "failure: {lost_after_frames: 5}\n"
-      "frame_interval_s: 0.04\n");
+      "frame_interval_s: 0.04\n"
+      "threads: 2\n");
   EXPECT_FALSE(o.preprocess.use_linf);
+  EXPECT_EQ(o.threads, 2);
   EXPECT_DOUBLE_EQ(o.preprocess.blur_sigma_px, 2.5);
   EXPECT_EQ(o.selection.color_mode, ColorMode::kRawColor);
   EXPECT_FALSE(o.selection.use_occlusion_rejection);
@@ -60,6 +62,7 @@ TEST(TrackerOptions, RejectsBadFilesNamingTheKey) {
   EXPECT_NE(message("colour: {}").find("colour"), std::string::npos);
   EXPECT_NE(message("pyramid: {max_levels: two}").find("pyramid.max_levels"), std::string::npos);
   EXPECT_NE(message("pyramid: {max_levels: 0}").find("max_levels"), std::string::npos);
+  EXPECT_NE(message("threads: -1").find("threads"), std::string::npos);
   EXPECT_NE(message("pyramid: {max_levels: 2, min_adaptive_levels: 3}").find("min_adaptive_levels"),
             std::string::npos);
   EXPECT_NE(message("selection: {color_mode: hsv}").find("hsv"), std::string::npos);

@@ -251,6 +251,22 @@ TEST_F(TrackerScene, AdaptivePyramidUsesFewerLevelsForSmallMotionsAndAllForAJump
   EXPECT_EQ(r.summary.num_levels, full) << r.BriefReport();
 }
 
+TEST_F(TrackerScene, SameResultOnOneAndTwoThreads) {
+  Vector6d d;
+  d << 0.004, -0.003, 0.01, 2 * kDeg, -2 * kDeg, 1 * kDeg;
+  const Rigid3d start = Perturb(truth_, d);
+  TrackerOptions options;
+  options.threads = 1;
+  const TrackResult one = Tracker(rig_, cube_, options).Align({image_}, start);
+  options.threads = 2;
+  const TrackResult two = Tracker(rig_, cube_, options).Align({image_}, start);
+  // Only the order of float sums differs (pixel selection runs in bands of rows).
+  EXPECT_LT(Difference(one.world_from_obj, two.world_from_obj).translation, 2e-5);
+  EXPECT_LT(Difference(one.world_from_obj, two.world_from_obj).rotation_rad, 0.005 * kDeg);
+  EXPECT_EQ(one.summary.counts.used, two.summary.counts.used);
+  EXPECT_NEAR(one.confidence, two.confidence, 0.01);
+}
+
 TEST_F(TrackerScene, ObjectLeavingTheViewIsReportedLost) {
   Tracker tracker(rig_, cube_);
   tracker.Initialize(truth_);
