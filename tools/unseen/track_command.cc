@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -137,8 +138,18 @@ void RunTrack(const TrackArgs& args) {
   double sum_t_mm = 0, max_t_mm = 0, sum_r_deg = 0, max_r_deg = 0;
   // Frames done, fps and ETA on stderr, when it is a terminal (logs stay clean).
   ProgressLine progress("track", frames, isatty(fileno(stderr)) != 0);
+  // The next frame is read (decoded, undistorted) on another thread while this one is
+  // tracked; one read at a time, in order.
+  auto read = [&](int i) {
+    return std::async(std::launch::async, [&sequence, index = args.first_frame + i] {
+      return sequence.ReadFrame(index);
+    });
+  };
+  std::future<Frame> next;
+  if (frames > 0) next = read(0);
   for (int i = 0; i < frames; ++i) {
-    const Frame frame = sequence.ReadFrame(args.first_frame + i);
+    const Frame frame = next.get();
+    if (i + 1 < frames) next = read(i + 1);
     Timer timer;
     const TrackResult r = tracker.Track(frame.images);
     const double ms = timer.ElapsedMilliseconds();
