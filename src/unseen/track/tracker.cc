@@ -88,7 +88,10 @@ struct Tracker::CameraWork {
   PreprocessedImage input_pre, virtual_pre;
   RenderBuffers render;
   bool virtual_ok = false;  // the last PrepareVirtual rendered something
-  StageTimes times;         // this camera's share of the current alignment
+  // This camera's share of the current alignment; the input's pre-processing apart, as it
+  // may run beside the virtual image's.
+  StageTimes times;
+  double input_preprocess_ms = 0.0;
 };
 
 Tracker::Tracker(const Rig& rig, Mesh model, const TrackerOptions& options)
@@ -418,7 +421,10 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
   const int bands = ncam > 1 ? 1 : threads;
   std::vector<FlowEquations> equations(ncam * bands);
   std::vector<SelectionCounts> band_counts(ncam * bands);
-  for (auto& w : work_) w->times = StageTimes();
+  for (auto& w : work_) {
+    w->times = StageTimes();
+    w->input_preprocess_ms = 0.0;
+  }
   Rigid3d pose = start;
 
   for (int level = s.num_levels - 1; level >= 0; --level) {
@@ -460,7 +466,7 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
         } else {
           Timer input_timer;
           Preprocess(w.input_roi, options_.preprocess, level, input_gradients, &w.input_pre);
-          w.times.preprocess_ms += input_timer.ElapsedMilliseconds();
+          w.input_preprocess_ms += input_timer.ElapsedMilliseconds();
         }
       }
       // Pixel selection (4.8)-(4.15), (3.6) in bands of rows.
@@ -526,7 +532,10 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
       if (update_px < min_update_px) break;
     }
   }
-  for (const auto& w : work_) s.times += w->times;
+  for (const auto& w : work_) {
+    s.times += w->times;
+    s.times.preprocess_ms += w->input_preprocess_ms;
+  }
   s.correction_px = UpdatePixels(start, TwistBetween(start, pose), 0);
   result.world_from_obj = pose;
   result.confidence = Confidence(s);
