@@ -23,7 +23,7 @@ int KernelSize(double sigma_px) {
 
 }  // namespace
 
-cv::Mat WideLowPass(const cv::Mat& image, double sigma_px) {
+cv::Mat LowPassDown(const cv::Mat& image, double sigma_px, int* factor_out) {
   CheckFloat(image, "WideLowPass");
   UNSEEN_CHECK(sigma_px > 0.0 && std::isfinite(sigma_px), "WideLowPass: sigma_px {} must be > 0",
                sigma_px);
@@ -32,11 +32,12 @@ cv::Mat WideLowPass(const cv::Mat& image, double sigma_px) {
          std::min(image.cols, image.rows) >= 8 * factor) {
     factor *= 2;
   }
-  cv::Mat out;
+  *factor_out = factor;
+  cv::Mat small;
   if (factor == 1) {
-    cv::GaussianBlur(image, out, cv::Size(KernelSize(sigma_px), KernelSize(sigma_px)), sigma_px,
+    cv::GaussianBlur(image, small, cv::Size(KernelSize(sigma_px), KernelSize(sigma_px)), sigma_px,
                      sigma_px, cv::BORDER_REPLICATE);
-    return out;
+    return small;
   }
   // Area down-sampling is itself a box low-pass of width `factor` (variance factor^2/12);
   // the remaining blur makes up the rest of the requested variance. The image is padded
@@ -51,13 +52,31 @@ cv::Mat WideLowPass(const cv::Mat& image, double sigma_px) {
   if (pad_cols > 0 || pad_rows > 0) {
     cv::copyMakeBorder(image, padded, 0, pad_rows, 0, pad_cols, cv::BORDER_REPLICATE);
   }
-  cv::Mat small;
   cv::resize(padded, small, cv::Size(small_cols, small_rows), 0, 0, cv::INTER_AREA);
   cv::GaussianBlur(small, small, cv::Size(KernelSize(sigma_small), KernelSize(sigma_small)),
                    sigma_small, sigma_small, cv::BORDER_REPLICATE);
-  cv::resize(small, out, padded.size(), 0, 0, cv::INTER_LINEAR);
-  if (pad_cols > 0 || pad_rows > 0) out = out(cv::Rect(0, 0, image.cols, image.rows)).clone();
+  return small;
+}
+
+cv::Mat LowPassUp(const cv::Mat& small, cv::Size size, int factor) {
+  if (factor == 1) return small;
+  UNSEEN_CHECK(small.cols * factor >= size.width && small.rows * factor >= size.height &&
+                   (small.cols - 1) * factor < size.width && (small.rows - 1) * factor < size.height,
+               "LowPassUp: {}x{} image at factor {} does not match {}x{}", small.cols, small.rows,
+               factor, size.width, size.height);
+  cv::Mat out;
+  cv::resize(small, out, cv::Size(small.cols * factor, small.rows * factor), 0, 0,
+             cv::INTER_LINEAR);
+  if (out.cols != size.width || out.rows != size.height) {
+    out = out(cv::Rect(0, 0, size.width, size.height)).clone();
+  }
   return out;
+}
+
+cv::Mat WideLowPass(const cv::Mat& image, double sigma_px) {
+  int factor = 1;
+  const cv::Mat small = LowPassDown(image, sigma_px, &factor);
+  return LowPassUp(small, image.size(), factor);
 }
 
 cv::Mat LocalIlluminationNormalize(const cv::Mat& image, double sigma_px, double epsilon) {

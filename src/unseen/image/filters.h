@@ -18,6 +18,14 @@ namespace unseen {
 // size as `image`.
 cv::Mat WideLowPass(const cv::Mat& image, double sigma_px);
 
+// WideLowPass in two halves, for callers that combine low-passed images at the coarse
+// scale and up-sample only the result: LowPassDown returns `image` area-down-sampled by
+// `*factor` (the power of two WideLowPass would choose; 1 for narrow kernels) and blurred
+// there; LowPassUp bilinearly brings such an image back to `size` (the original size).
+// WideLowPass(image, s) == LowPassUp(LowPassDown(image, s, &f), image.size(), f).
+cv::Mat LowPassDown(const cv::Mat& image, double sigma_px, int* factor);
+cv::Mat LowPassUp(const cv::Mat& small, cv::Size size, int factor);
+
 // Local Illumination Normalization Filter, SPEC 3.2 (4.11), per channel:
 //   I'(x, y) = 0.5 (I(x, y) + eps) / ((G * I)(x, y) + eps)
 // with G a Gaussian of `sigma_px` pixels (WideLowPass) and `epsilon` the noise constant

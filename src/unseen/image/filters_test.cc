@@ -97,5 +97,22 @@ TEST(Filters, RejectsBadArguments) {
   EXPECT_THROW(WideLowPass(cv::Mat(), 4.0), Error);
 }
 
+TEST(Filters, LowPassHalvesComposeToWideLowPass) {
+  cv::Mat image(37, 53, CV_32FC4);  // odd size: the halves pad and crop
+  cv::RNG(5).fill(image, cv::RNG::UNIFORM, 0.0, 1.0);
+  for (double sigma : {1.5, 4.0, 9.0}) {
+    int factor = 0;
+    const cv::Mat small = LowPassDown(image, sigma, &factor);
+    EXPECT_EQ(factor, sigma < 4.0 ? 1 : (sigma < 8.0 ? 2 : 4)) << sigma;
+    EXPECT_EQ(small.cols, (image.cols + factor - 1) / factor);
+    const cv::Mat both = LowPassUp(small, image.size(), factor);
+    ASSERT_EQ(both.size(), image.size());
+    EXPECT_LT(cv::norm(both, WideLowPass(image, sigma), cv::NORM_INF), 1e-6) << sigma;
+  }
+  int factor = 0;
+  const cv::Mat small = LowPassDown(image, 9.0, &factor);
+  EXPECT_THROW(LowPassUp(small, cv::Size(200, 37), factor), Error);
+}
+
 }  // namespace
 }  // namespace unseen

@@ -213,31 +213,52 @@ TrackResult Tracker::Align(const std::vector<cv::Mat>& images, const Rigid3d& wo
 void Tracker::TransferShading(int level, CameraWork* work) const {
   CameraWork& w = *work;
   // Low-pass of input and render over the fully covered pixels only (so the background
-  // does not leak in); their ratio is the shading the model lacks.
-  cv::Mat full;
-  cv::compare(w.coverage, 4, full, cv::CMP_EQ);
-  cv::Mat weight;
-  full.convertTo(weight, CV_32F, 1.0 / 255.0);
-  cv::Mat weight3;
-  cv::merge(std::vector<cv::Mat>{weight, weight, weight}, weight3);
-  const double sigma = options_.preprocess.ShadingSigmaAtLevel(level);
-  const cv::Mat real = WideLowPass(w.input_roi.mul(weight3), sigma);
-  const cv::Mat model = WideLowPass(w.composite.mul(weight3), sigma);
-  const cv::Mat support = WideLowPass(weight, sigma);
-  const int width = w.composite.cols;
-  for (int y = 0; y < w.composite.rows; ++y) {
+  // does not leak in); their ratio is the shading the model lacks. The ratio is formed at
+  // the low-pass's coarse scale and only it is up-sampled.
+  const int width = w.composite.cols, height = w.composite.rows;
+  cv::Mat real(height, width, CV_32FC4), model(height, width, CV_32FC3);
+  for (int y = 0; y < height; ++y) {
     const uint8_t* cov = w.coverage.ptr<uint8_t>(y);
-    const float* r = real.ptr<float>(y);
-    const float* m = model.ptr<float>(y);
-    const float* sup = support.ptr<float>(y);
-    float* out = w.composite.ptr<float>(y);
+    const float* in = w.input_roi.ptr<float>(y);
+    const float* co = w.composite.ptr<float>(y);
+    float* r = real.ptr<float>(y);
+    float* m = model.ptr<float>(y);
     for (int x = 0; x < width; ++x) {
-      if (!cov[x] || sup[x] < 0.05f) continue;
+      const float weight = cov[x] == 4 ? 1.0f : 0.0f;
+      for (int k = 0; k < 3; ++k) {
+        r[4 * x + k] = weight * in[3 * x + k];
+        m[3 * x + k] = weight * co[3 * x + k];
+      }
+      r[4 * x + 3] = weight;  // the support: share of fully covered pixels
+    }
+  }
+  const double sigma = options_.preprocess.ShadingSigmaAtLevel(level);
+  int factor = 1;
+  const cv::Mat real_low = LowPassDown(real, sigma, &factor);
+  const cv::Mat model_low = LowPassDown(model, sigma, &factor);
+  cv::Mat gain_low(real_low.size(), CV_32FC3);
+  for (int y = 0; y < gain_low.rows; ++y) {
+    const float* r = real_low.ptr<float>(y);
+    const float* m = model_low.ptr<float>(y);
+    float* g = gain_low.ptr<float>(y);
+    for (int x = 0; x < gain_low.cols; ++x) {
+      const float support = r[4 * x + 3];
       for (int k = 0; k < 3; ++k) {
         const float den = m[3 * x + k];
-        const float gain = den > 0.01f * sup[x] ? std::clamp(r[3 * x + k] / den, 0.2f, 5.0f) : 1.0f;
-        out[3 * x + k] *= gain;
+        g[3 * x + k] = support >= 0.05f && den > 0.01f * support
+                           ? std::clamp(r[4 * x + k] / den, 0.2f, 5.0f)
+                           : 1.0f;
       }
+    }
+  }
+  const cv::Mat gain = LowPassUp(gain_low, w.composite.size(), factor);
+  for (int y = 0; y < height; ++y) {
+    const uint8_t* cov = w.coverage.ptr<uint8_t>(y);
+    const float* g = gain.ptr<float>(y);
+    float* out = w.composite.ptr<float>(y);
+    for (int x = 0; x < width; ++x) {
+      if (!cov[x]) continue;
+      for (int k = 0; k < 3; ++k) out[3 * x + k] *= g[3 * x + k];
     }
   }
 }
