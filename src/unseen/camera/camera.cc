@@ -82,6 +82,26 @@ PinholeCamera PinholeCamera::PyramidLevel(int level) const {
   return Scaled(static_cast<double>(1 << level));
 }
 
+namespace {
+
+// The pixels whose centres lie within [xl, xh] x [yl, yh] (image coordinates), clipped to
+// a width x height image; std::nullopt when none.
+std::optional<PixelRect> PixelsSpanned(double xl, double xh, double yl, double yh, int width,
+                                       int height) {
+  auto clamp_lo = [](double v, int size) {
+    return static_cast<int>(std::clamp(std::floor(v + 0.5), 0.0, double(size)));
+  };
+  auto clamp_hi = [](double v, int size) {
+    return static_cast<int>(std::clamp(std::ceil(v + 0.5), 0.0, double(size)));
+  };
+  PixelRect rect{clamp_lo(xl, width), clamp_lo(yl, height), clamp_hi(xh, width),
+                 clamp_hi(yh, height)};
+  if (rect.empty()) return std::nullopt;
+  return rect;
+}
+
+}  // namespace
+
 std::optional<PixelRect> PinholeCamera::SphereRect(const Eigen::Vector3d& p, double r) const {
   if (!p.allFinite() || !(r >= 0.0)) return std::nullopt;
   if (p.norm() <= r) return ImageRect();
@@ -105,16 +125,7 @@ std::optional<PixelRect> PinholeCamera::SphereRect(const Eigen::Vector3d& p, dou
   double xl, xh, yl, yh;
   edges(p.x(), fx, cx, width, &xl, &xh);
   edges(p.y(), fy, cy, height, &yl, &yh);
-  auto clamp_lo = [](double v, int size) {
-    return static_cast<int>(std::clamp(std::floor(v + 0.5), 0.0, double(size)));
-  };
-  auto clamp_hi = [](double v, int size) {
-    return static_cast<int>(std::clamp(std::ceil(v + 0.5), 0.0, double(size)));
-  };
-  PixelRect rect{clamp_lo(xl, width), clamp_lo(yl, height), clamp_hi(xh, width),
-                 clamp_hi(yh, height)};
-  if (rect.empty()) return std::nullopt;
-  return rect;
+  return PixelsSpanned(xl, xh, yl, yh, width, height);
 }
 
 int Rig::Find(const std::string& name) const {
@@ -131,6 +142,22 @@ void Rig::Check() const {
     UNSEEN_CHECK(c.world_from_cam.IsValid(), "camera '{}': world_from_cam is not a valid pose",
                  c.name);
   }
+}
+
+std::optional<PixelRect> PinholeCamera::PointsRect(
+    const std::vector<Eigen::Vector3d>& points_in_cam) const {
+  if (points_in_cam.empty()) return std::nullopt;
+  double xl = std::numeric_limits<double>::infinity(), yl = xl;
+  double xh = -std::numeric_limits<double>::infinity(), yh = xh;
+  for (const Eigen::Vector3d& p : points_in_cam) {
+    if (!p.allFinite() || !(p.z() >= 1e-3)) return std::nullopt;
+    const double x = fx * p.x() / p.z() + cx, y = fy * p.y() / p.z() + cy;
+    xl = std::min(xl, x);
+    xh = std::max(xh, x);
+    yl = std::min(yl, y);
+    yh = std::max(yh, y);
+  }
+  return PixelsSpanned(xl, xh, yl, yh, width, height);
 }
 
 }  // namespace unseen

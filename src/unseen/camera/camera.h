@@ -67,6 +67,11 @@ struct PinholeCamera {
   // sphere the whole image is returned.
   std::optional<PixelRect> SphereRect(const Eigen::Vector3d& centre_in_cam,
                                       double radius) const;
+  // Bounding rectangle of the projections of `points_in_cam` (e.g. the corners of a box
+  // around an object: then it bounds the object's projection), clipped to the image, with
+  // SphereRect's pixel convention. std::nullopt for no points, a point not in front of the
+  // camera (z < 1 mm; the rectangle would be unbounded) or a rectangle outside the image.
+  std::optional<PixelRect> PointsRect(const std::vector<Eigen::Vector3d>& points_in_cam) const;
 };
 
 // One camera of a synchronized rig.

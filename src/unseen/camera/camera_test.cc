@@ -2,6 +2,7 @@
 #include "unseen/camera/camera.h"
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
 
 #include "unseen/util/error.h"
 
@@ -67,6 +68,39 @@ TEST(PinholeCamera, SphereRectOutsideAndBehind) {
   const auto all = c.SphereRect({0, 0, 0.05}, 0.1);
   ASSERT_TRUE(all.has_value());
   EXPECT_EQ(*all, c.ImageRect());
+}
+
+TEST(PinholeCamera, PointsRectBoundsTheProjectionsTightly) {
+  const PinholeCamera cam = PinholeCamera::Centered(640, 480, 500.0);
+  // A 10 cm box 1 m away, turned: its corners' rectangle holds every projected point of
+  // the box and is tighter than its bounding sphere's.
+  const Rigid3d cam_from_obj(ExpSO3(Eigen::Vector3d(0.3, 0.5, 0.1)), Eigen::Vector3d(0.05, 0, 1));
+  std::vector<Eigen::Vector3d> corners;
+  for (int k = 0; k < 8; ++k) {
+    corners.push_back(cam_from_obj * Eigen::Vector3d(k & 1 ? 0.05 : -0.05, k & 2 ? 0.05 : -0.05,
+                                                     k & 4 ? 0.05 : -0.05));
+  }
+  const std::optional<PixelRect> rect = cam.PointsRect(corners);
+  ASSERT_TRUE(rect.has_value());
+  cv::RNG rng(2);
+  for (int i = 0; i < 1000; ++i) {
+    const Eigen::Vector3d p_in_obj(rng.uniform(-0.05, 0.05), rng.uniform(-0.05, 0.05),
+                                   rng.uniform(-0.05, 0.05));
+    const Eigen::Vector2d px = cam.Project(cam_from_obj * p_in_obj);
+    const int x = static_cast<int>(std::lround(px.x())), y = static_cast<int>(std::lround(px.y()));
+    EXPECT_TRUE(x >= rect->x0 && x < rect->x1 && y >= rect->y0 && y < rect->y1) << x << " " << y;
+  }
+  const std::optional<PixelRect> sphere =
+      cam.SphereRect(cam_from_obj.translation(), 0.05 * std::sqrt(3.0));
+  ASSERT_TRUE(sphere.has_value());
+  EXPECT_LT(rect->width() * rect->height(), sphere->width() * sphere->height());
+  EXPECT_EQ(rect->Intersect(*sphere), *rect);
+  // A point behind the camera leaves the rectangle unbounded; no points, no rectangle.
+  corners.push_back(Eigen::Vector3d(0, 0, -0.5));
+  EXPECT_FALSE(cam.PointsRect(corners).has_value());
+  EXPECT_FALSE(cam.PointsRect({}).has_value());
+  // Entirely off to the side of the image.
+  EXPECT_FALSE(cam.PointsRect({Eigen::Vector3d(5, 0, 1), Eigen::Vector3d(6, 0.1, 1)}).has_value());
 }
 
 TEST(PinholeCamera, CheckRejectsBadIntrinsics) {

@@ -88,6 +88,7 @@ struct Tracker::CameraWork {
   PreprocessedImage input_pre, virtual_pre;
   RenderBuffers render;
   bool virtual_ok = false;  // the last PrepareVirtual rendered something
+  bool input_stale = false; // input_roi changed since input_pre was computed
   // This camera's share of the current alignment; the input's pre-processing apart, as it
   // may run beside the virtual image's.
   StageTimes times;
@@ -117,7 +118,34 @@ void Tracker::SetModel(Mesh model) {
                "tracker model: bounding-sphere radius {} m must be positive", radius);
   sphere_centre_ = centre.cast<double>();
   sphere_radius_ = radius;
+  // Corners of the model's axis-aligned box, object frame.
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = -lo;
+  for (const Eigen::Vector3f& v : model.vertices) {
+    lo = lo.cwiseMin(v.cast<double>());
+    hi = hi.cwiseMax(v.cast<double>());
+  }
+  box_corners_.clear();
+  for (int k = 0; k < 8; ++k) {
+    box_corners_.emplace_back(k & 1 ? hi.x() : lo.x(), k & 2 ? hi.y() : lo.y(),
+                              k & 4 ? hi.z() : lo.z());
+  }
   model_ = std::make_shared<const Mesh>(std::move(model));
+}
+
+std::optional<PixelRect> Tracker::ObjectRect(const PinholeCamera& camera,
+                                             const Rigid3d& cam_from_obj) const {
+  const std::optional<PixelRect> sphere =
+      camera.SphereRect(cam_from_obj * sphere_centre_, sphere_radius_);
+  if (!sphere) return std::nullopt;
+  std::vector<Eigen::Vector3d> corners;
+  corners.reserve(box_corners_.size());
+  for (const Eigen::Vector3d& p : box_corners_) corners.push_back(cam_from_obj * p);
+  const std::optional<PixelRect> box = camera.PointsRect(corners);
+  if (!box) return sphere;  // a corner behind the camera: the sphere's rectangle
+  const PixelRect both = box->Intersect(*sphere);
+  if (both.empty()) return std::nullopt;
+  return both;
 }
 
 void Tracker::Initialize(const Rigid3d& world_from_obj) {
@@ -271,11 +299,10 @@ bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int l
   render_options.threads = options_.threads;
   Timer timer;
   const int width = w.roi.width(), height = w.roi.height();
-  // The object covers no pixel outside its bounding sphere's rectangle, so only that part
-  // of the region (plus a pixel) is rendered; the margin the filters need stays input.
+  // The object covers no pixel outside its rectangle, so only that part of the region
+  // (plus a pixel) is rendered; the margin the filters need stays input.
   PixelRect rr = w.roi;
-  if (const std::optional<PixelRect> rect =
-          w.camera.SphereRect(cam_from_obj * sphere_centre_, sphere_radius_)) {
+  if (const std::optional<PixelRect> rect = ObjectRect(w.camera, cam_from_obj)) {
     const PixelRect tight = rect->Grow(1).Intersect(w.roi);
     if (!tight.empty()) rr = tight;
   }
@@ -449,20 +476,30 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
   Rigid3d pose = start;
 
   for (int level = s.num_levels - 1; level >= 0; --level) {
-    // Region of interest, once per level (3.5).
-    Timer timer;
-    for (int c = 0; c < ncam; ++c) {
+    // Region of interest (3.5): at the coarsest level the bounding sphere's rectangle,
+    // whose slack around the object leaves room for the object to be found some way off;
+    // at finer levels, where the pose is already close, the tighter object rectangle. Both
+    // grown by the filters' margin. Placed again when the object drifts out of it.
+    const bool coarsest = level == s.num_levels - 1;
+    auto place_region = [&](int c, const Rigid3d& world_from_obj) {
       CameraWork& w = *work_[c];
       w.active = false;
-      w.camera = rig_.cameras[c].intrinsics.PyramidLevel(level);
-      const Eigen::Vector3d centre = cam_from_world_[c] * (pose * sphere_centre_);
-      const std::optional<PixelRect> rect = w.camera.SphereRect(centre, sphere_radius_);
-      if (!rect) continue;
-      const PinholeCamera& cam0 = rig_.cameras[c].intrinsics;
-      w.roi = rect->Grow(margin).Intersect(LevelRect(cam0.width, cam0.height, level));
-      if (w.roi.width() < 8 || w.roi.height() < 8) continue;
+      const Rigid3d cam_from_obj = cam_from_world_[c] * world_from_obj;
+      const std::optional<PixelRect> rect =
+          coarsest ? w.camera.SphereRect(cam_from_obj * sphere_centre_, sphere_radius_)
+                   : ObjectRect(w.camera, cam_from_obj);
+      if (!rect) return;
+      const PinholeCamera& full = rig_.cameras[c].intrinsics;
+      w.roi = rect->Grow(margin).Intersect(LevelRect(full.width, full.height, level));
+      if (w.roi.width() < 8 || w.roi.height() < 8) return;
       w.input_roi = DownsampledRegion(images[c], level, w.roi);
+      w.input_stale = true;
       w.active = true;
+    };
+    Timer timer;
+    for (int c = 0; c < ncam; ++c) {
+      work_[c]->camera = rig_.cameras[c].intrinsics.PyramidLevel(level);
+      place_region(c, pose);
     }
     s.times.preprocess_ms += timer.ElapsedMilliseconds();
 
@@ -473,20 +510,35 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
     SelectionCounts counts;
     for (int iteration = 0; iteration < max_iterations; ++iteration) {
       ++s.renders;
-      // Independent jobs on the available threads: per camera, the virtual image (render
-      // and its pre-processing) and, in the first round of a level, the input's
-      // pre-processing.
       const Rigid3d round_pose = pose;
-      const int jobs = (iteration == 0 ? 2 : 1) * ncam;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads > 1 && jobs > 1)
+      if (iteration > 0 && !coarsest) {
+        timer.Restart();
+        for (int c = 0; c < ncam; ++c) {
+          CameraWork& w = *work_[c];
+          if (!w.active) continue;
+          const std::optional<PixelRect> rect =
+              ObjectRect(w.camera, cam_from_world_[c] * round_pose);
+          if (!rect) continue;
+          const PinholeCamera& full = rig_.cameras[c].intrinsics;
+          const PixelRect need =
+              rect->Grow(margin - 2).Intersect(LevelRect(full.width, full.height, level));
+          if (need.Intersect(w.roi) != need) place_region(c, round_pose);
+        }
+        s.times.preprocess_ms += timer.ElapsedMilliseconds();
+      }
+      // Independent jobs on the available threads: per camera, the virtual image (render
+      // and its pre-processing) and, after the region was placed, the input's.
+      const int jobs = 2 * ncam;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads > 1)
       for (int j = 0; j < jobs; ++j) {
         CameraWork& w = *work_[j % ncam];
         if (!w.active) continue;
         if (j < ncam) {
           w.virtual_ok = PrepareVirtual(cam_from_world_[j] * round_pose, level, &w);
-        } else {
+        } else if (w.input_stale) {
           Timer input_timer;
           Preprocess(w.input_roi, options_.preprocess, level, input_gradients, &w.input_pre);
+          w.input_stale = false;
           w.input_preprocess_ms += input_timer.ElapsedMilliseconds();
         }
       }

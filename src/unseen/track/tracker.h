@@ -112,6 +112,11 @@ class Tracker {
   // corrections call for (PyramidOptions::adaptive_levels).
   TrackResult AlignPredicted(const std::vector<cv::Mat>& images, const Rigid3d& predicted);
   double Confidence(const SolveSummary& summary) const;
+  // The rectangle of `camera`'s pixels the object can cover at `cam_from_obj`: the
+  // bounding sphere's rectangle (3.5, (4.16)-(4.21)) cut down to the projection of the
+  // model's box, which is tighter for all but round objects. std::nullopt: out of view.
+  std::optional<PixelRect> ObjectRect(const PinholeCamera& camera,
+                                      const Rigid3d& cam_from_obj) const;
   // Renders the model into `work`'s region at `cam_from_obj` and composes the virtual image
   // (input with the render over it), its mask and depth; false when nothing was rendered.
   // Touches only `work` (cameras run in parallel).
@@ -131,6 +136,7 @@ class Tracker {
   std::shared_ptr<const Mesh> model_;
   Eigen::Vector3d sphere_centre_ = Eigen::Vector3d::Zero();  // object frame
   double sphere_radius_ = 0.0;
+  std::vector<Eigen::Vector3d> box_corners_;  // the model's axis-aligned box, object frame
   TrackerOptions options_;
   std::unique_ptr<MotionPredictor> predictor_;
   std::vector<std::unique_ptr<CameraWork>> work_;
