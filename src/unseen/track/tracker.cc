@@ -469,6 +469,7 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
   const int bands = ncam > 1 ? 1 : threads;
   std::vector<FlowEquations> equations(ncam * bands);
   std::vector<SelectionCounts> band_counts(ncam * bands);
+  std::vector<int> jobs;  // c: camera c's virtual image; ncam + c: its input
   for (auto& w : work_) {
     w->times = StageTimes();
     w->input_preprocess_ms = 0.0;
@@ -527,15 +528,22 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
         s.times.preprocess_ms += timer.ElapsedMilliseconds();
       }
       // Independent jobs on the available threads: per camera, the virtual image (render
-      // and its pre-processing) and, after the region was placed, the input's.
-      const int jobs = 2 * ncam;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads > 1)
-      for (int j = 0; j < jobs; ++j) {
-        CameraWork& w = *work_[j % ncam];
-        if (!w.active) continue;
-        if (j < ncam) {
-          w.virtual_ok = PrepareVirtual(cam_from_world_[j] * round_pose, level, &w);
-        } else if (w.input_stale) {
+      // and its pre-processing) and, after the region was placed, the input's. A single
+      // job keeps the threads for itself (the render's shading pass).
+      jobs.clear();
+      for (int c = 0; c < ncam; ++c) {
+        if (!work_[c]->active) continue;
+        jobs.push_back(c);                                   // virtual image
+        if (work_[c]->input_stale) jobs.push_back(ncam + c);  // input
+      }
+      const int num_jobs = static_cast<int>(jobs.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads > 1 && num_jobs > 1)
+      for (int j = 0; j < num_jobs; ++j) {
+        const int c = jobs[j] % ncam;
+        CameraWork& w = *work_[c];
+        if (jobs[j] < ncam) {
+          w.virtual_ok = PrepareVirtual(cam_from_world_[c] * round_pose, level, &w);
+        } else {
           Timer input_timer;
           Preprocess(w.input_roi, options_.preprocess, level, input_gradients, &w.input_pre);
           w.input_stale = false;
