@@ -23,7 +23,6 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
-#include <omp.h>
 #include <opencv2/core/utility.hpp>
 
 #include "unseen/eval/evaluation.h"
@@ -74,7 +73,6 @@ struct RunOutcome {
 };
 
 RunOutcome Execute(const Run& run, int max_frames) {
-  omp_set_num_threads(run.threads);
   cv::setNumThreads(run.threads);
   const Sequence sequence = Sequence::Open(run.sequence_dir);
   UNSEEN_CHECK(sequence.has_ground_truth(), "{}: the benchmark needs ground truth",

@@ -8,7 +8,6 @@
 #include <vector>
 
 #include <Eigen/Geometry>
-#include <omp.h>
 #if defined(__SSE2__)
 #include <immintrin.h>
 #endif
@@ -19,8 +18,6 @@
 namespace unseen {
 
 void RenderOptions::Check() const {
-  UNSEEN_CHECK(threads >= 0 && threads <= 256, "RenderOptions.threads = {} must be in [0, 256]",
-               threads);
   UNSEEN_CHECK(std::isfinite(near_m) && near_m > 0.0,
                "RenderOptions.near_m = {} must be positive and finite (metres)", near_m);
 }
@@ -857,14 +854,15 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
   for (int y = 0; y < size.height; ++y) InvertPositive(out->depth.ptr<float>(y), size.width);
   const Eigen::Matrix3f rotation = cam_from_obj.RotationMatrix().cast<float>();
   const int width = size.width;
-  // Rows are independent; the shader caches per-triangle state, so one per thread. (Inside
-  // an enclosing parallel region, e.g. one render per camera, this runs on one thread.)
-  const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
-#pragma omp parallel num_threads(threads) if (threads > 1 && size.area() >= kParallelResolvePixels)
-  {
+  // Rows are independent: bands of rows on the pool's threads, with a shader each (it
+  // caches per-triangle state).
+  const int bands = options.pool != nullptr && size.area() >= kParallelResolvePixels
+                        ? std::min(options.pool->size(), size.height)
+                        : 1;
+  auto resolve_band = [&](int band) {
     Shader shader(mesh, textures);
-#pragma omp for schedule(static)
-    for (int y = 0; y < size.height; ++y) {
+    const int row_end = size.height * (band + 1) / bands;
+    for (int y = size.height * band / bands; y < row_end; ++y) {
       float* z = out->depth.ptr<float>(y);
       uint8_t* m = out->mask.ptr<uint8_t>(y);
       if (options.write_triangle_ids) {
@@ -911,7 +909,12 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
         }
       }
     }
-  }  // omp parallel
+  };
+  if (bands > 1) {
+    options.pool->ParallelFor(bands, resolve_band);
+  } else {
+    resolve_band(0);
+  }
 }
 
 }  // namespace unseen

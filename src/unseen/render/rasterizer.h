@@ -38,6 +38,7 @@
 #include "unseen/camera/camera.h"
 #include "unseen/geometry/rigid3.h"
 #include "unseen/mesh/mesh.h"
+#include "unseen/util/thread_pool.h"
 
 namespace unseen {
 
@@ -50,9 +51,9 @@ struct RenderOptions {
   // material and render, floor(log2(texels per pixel) / 2) over its drawn triangles.
   bool mipmaps = true;
   double near_m = 1e-3;            // near clipping distance, metres (> 0)
-  // Threads of the shading pass (rows in parallel, for regions of 8 192 pixels or more);
-  // 0: all hardware threads. Inside an enclosing parallel region it runs on one thread.
-  int threads = 1;
+  // Runs the shading pass's rows on these threads (regions of 8 192 pixels or more); null:
+  // on the calling thread. Not owned; must not be running another loop.
+  ThreadPool* pool = nullptr;
   void Check() const;
 };
 

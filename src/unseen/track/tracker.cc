@@ -5,7 +5,6 @@
 #include <cmath>
 
 #include <fmt/format.h>
-#include <omp.h>
 #include <opencv2/imgproc.hpp>
 
 #include "unseen/image/filters.h"
@@ -104,7 +103,16 @@ Tracker::Tracker(const Rig& rig, Mesh model, const TrackerOptions& options)
     work_.push_back(std::make_unique<CameraWork>());
   }
   predictor_ = MakeMotionPredictor(options_.predictor);
+  if (options_.threads != 1) pool_ = std::make_unique<ThreadPool>(options_.threads);
   SetModel(std::move(model));
+}
+
+void Tracker::RunParallel(int n, const std::function<void(int)>& fn) {
+  if (pool_) {
+    pool_->ParallelFor(n, fn);
+  } else {
+    for (int i = 0; i < n; ++i) fn(i);
+  }
 }
 
 Tracker::~Tracker() = default;
@@ -292,11 +300,11 @@ void Tracker::TransferShading(int level, CameraWork* work) const {
 }
 
 bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int level,
-                            CameraWork* work) const {
+                            ThreadPool* render_pool, CameraWork* work) const {
   CameraWork& w = *work;
   StageTimes* times = &w.times;
   RenderOptions render_options;
-  render_options.threads = options_.threads;
+  render_options.pool = render_pool;
   Timer timer;
   const int width = w.roi.width(), height = w.roi.height();
   // The object covers no pixel outside its rectangle, so only that part of the region
@@ -428,10 +436,13 @@ bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int l
   return true;
 }
 
-bool Tracker::PrepareVirtual(const Rigid3d& cam_from_obj, int level, CameraWork* work) const {
+bool Tracker::PrepareVirtual(const Rigid3d& cam_from_obj, int level, ThreadPool* render_pool,
+                             CameraWork* work) const {
   CameraWork& w = *work;
   const PyramidOptions& po = options_.pyramid;
-  if (!RenderVirtual(cam_from_obj, level < po.supersampled_levels, level, &w)) return false;
+  if (!RenderVirtual(cam_from_obj, level < po.supersampled_levels, level, render_pool, &w)) {
+    return false;
+  }
   Timer timer;
   Preprocess(w.composite, options_.preprocess, level, true, &w.virtual_pre);
   // Mask and its blurred rim; depth of the rim from the nearest surface.
@@ -464,7 +475,7 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
   const int margin =
       static_cast<int>(std::ceil(3.0 * options_.preprocess.blur_sigma_px)) + po.rim_px + 2;
   const bool input_gradients = options_.selection.use_occlusion_rejection;
-  const int threads = options_.threads > 0 ? options_.threads : omp_get_max_threads();
+  const int threads = pool_ ? pool_->size() : 1;
   // Pixel selection runs in bands of rows: one per camera, or one per thread for one camera.
   const int bands = ncam > 1 ? 1 : threads;
   std::vector<FlowEquations> equations(ncam * bands);
@@ -537,28 +548,27 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
         if (work_[c]->input_stale) jobs.push_back(ncam + c);  // input
       }
       const int num_jobs = static_cast<int>(jobs.size());
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads > 1 && num_jobs > 1)
-      for (int j = 0; j < num_jobs; ++j) {
+      ThreadPool* render_pool = num_jobs == 1 ? pool_.get() : nullptr;
+      RunParallel(num_jobs, [&](int j) {
         const int c = jobs[j] % ncam;
         CameraWork& w = *work_[c];
         if (jobs[j] < ncam) {
-          w.virtual_ok = PrepareVirtual(cam_from_world_[c] * round_pose, level, &w);
+          w.virtual_ok = PrepareVirtual(cam_from_world_[c] * round_pose, level, render_pool, &w);
         } else {
           Timer input_timer;
           Preprocess(w.input_roi, options_.preprocess, level, input_gradients, &w.input_pre);
           w.input_stale = false;
           w.input_preprocess_ms += input_timer.ElapsedMilliseconds();
         }
-      }
+      });
       // Pixel selection (4.8)-(4.15), (3.6) in bands of rows.
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) \
-    if (threads > 1 && ncam * bands > 1)
-      for (int j = 0; j < ncam * bands; ++j) {
+      std::vector<double> band_ms(ncam * bands, 0.0);
+      RunParallel(ncam * bands, [&](int j) {
         const int c = j / bands, band = j % bands;
         CameraWork& w = *work_[c];
         equations[j].Clear();
         band_counts[j] = SelectionCounts();
-        if (!w.active || !w.virtual_ok) continue;
+        if (!w.active || !w.virtual_ok) return;
         Timer select_timer;
         SelectionInput in;
         in.virtual_image = &w.virtual_pre;
@@ -572,10 +582,9 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
         in.row_end = w.roi.height() * (band + 1) / bands;
         equations[j].world_from_cam_rotation = rig_.cameras[c].world_from_cam.RotationMatrix();
         SelectPixels(in, options_.selection, &equations[j], &band_counts[j]);
-        const double ms = select_timer.ElapsedMilliseconds();
-#pragma omp atomic
-        w.times.select_ms += ms;
-      }
+        band_ms[j] = select_timer.ElapsedMilliseconds();
+      });
+      for (int j = 0; j < ncam * bands; ++j) work_[j / bands]->times.select_ms += band_ms[j];
       counts = SelectionCounts();
       for (const SelectionCounts& b : band_counts) counts += b;
 

@@ -10,6 +10,7 @@
 // run on several threads (TrackerOptions::threads).
 #pragma once
 
+#include <functional>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -27,6 +28,7 @@
 #include "unseen/track/pixel_selection.h"
 #include "unseen/track/preprocess.h"
 #include "unseen/track/tracker_options.h"
+#include "unseen/util/thread_pool.h"
 
 namespace unseen {
 
@@ -120,11 +122,15 @@ class Tracker {
   // Renders the model into `work`'s region at `cam_from_obj` and composes the virtual image
   // (input with the render over it), its mask and depth; false when nothing was rendered.
   // Touches only `work` (cameras run in parallel).
+  // `render_pool` (may be null) runs the render's shading pass.
   bool RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int level,
-                     CameraWork* work) const;
+                     ThreadPool* render_pool, CameraWork* work) const;
   // RenderVirtual, then the virtual image's pre-processing and the region used (mask and
   // rim) with its depth.
-  bool PrepareVirtual(const Rigid3d& cam_from_obj, int level, CameraWork* work) const;
+  bool PrepareVirtual(const Rigid3d& cam_from_obj, int level, ThreadPool* render_pool,
+                      CameraWork* work) const;
+  // fn(0) ... fn(n - 1) on the pool's threads, or in order without a pool.
+  void RunParallel(int n, const std::function<void(int)>& fn);
   // Multiplies the rendered colour of `work`'s virtual image by the low-frequency ratio of
   // input to render over the object's pixels (PreprocessOptions::shading_transfer).
   void TransferShading(int level, CameraWork* work) const;
@@ -139,6 +145,7 @@ class Tracker {
   std::vector<Eigen::Vector3d> box_corners_;  // the model's axis-aligned box, object frame
   TrackerOptions options_;
   std::unique_ptr<MotionPredictor> predictor_;
+  std::unique_ptr<ThreadPool> pool_;  // null with one thread
   std::vector<std::unique_ptr<CameraWork>> work_;
 
   bool initialized_ = false;

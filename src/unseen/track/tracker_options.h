@@ -94,10 +94,10 @@ struct TrackerOptions {
   MotionPredictorOptions predictor;
   FailureOptions failure;
   double frame_interval_s = 1.0 / 30.0;  // time between frames for the predictor, s
-  // Threads for one frame: cameras (render, pre-processing, selection) in parallel, and
-  // with one camera the input's pre-processing beside the render, selection in bands of
-  // rows and the render's shading pass. 0: all hardware threads (OpenMP's default). One
-  // thread by default: fine-grained parallel work stalls when another process holds a core.
+  // Threads for one frame (a ThreadPool): cameras are rendered, pre-processed and
+  // selected in parallel; with one camera the input's pre-processing runs beside the first
+  // render of a level, selection in bands of rows and the render's shading pass in bands
+  // too. 0: all hardware threads. One by default, the figure the thesis measured.
   int threads = 1;
   void Check() const;
 };
