@@ -530,7 +530,9 @@ TrackResult Reacquisition::Seed(const std::vector<cv::Mat>& images, const Rigid3
                      "(first {:.2f})",
                      seeds[0].max_shift_px, seeds[0].level, seeds[0].score, r.confidence,
                      best.confidence);
-    if (r.confidence > best.confidence) {
+    // A jump needs the evidence of a re-acquisition: a marginal pose far away is more
+    // likely a look-alike than the object.
+    if (r.confidence >= options.failure.recover_confidence && r.confidence > best.confidence) {
       best = std::move(r);
       *from_seed = true;
     }

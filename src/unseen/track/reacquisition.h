@@ -109,7 +109,8 @@ class Reacquisition {
                      TrackResult first);
   // While tracking, for a doubtful frame: `first` is the full alignment from `predicted`.
   // Aligns from the correlation seed around `predicted` when it moves the object, and
-  // returns the more confident of the two; `*from_seed` tells whether that is the seed's.
+  // returns that alignment when it is at least failure.recover_confidence and more
+  // confident than `first` (`*from_seed` then true), else `first`.
   TrackResult Seed(const std::vector<cv::Mat>& images, const Rigid3d& predicted,
                    TrackResult first, bool* from_seed);
 
