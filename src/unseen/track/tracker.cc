@@ -502,13 +502,13 @@ TrackResult Tracker::Track(const std::vector<cv::Mat>& images_per_camera) {
     // good pose, scored at the coarse levels, the best refined.
     r = Reacquirer().Search(images, last_good_, std::move(r));
   } else if (status_ == TrackStatus::kTracking && options_.reacquisition.seed_when_doubtful &&
-             r.confidence < f.lost_confidence) {
+             r.confidence < options_.reacquisition.doubtful_confidence) {
     // A doubtful frame may have moved beyond the pyramid's capture range: try the
-    // correlation seed before counting it as bad. The motion model did not bring the
-    // object where the seed found it: it restarts there rather than learning the jump.
+    // correlation seed before judging it. The motion model did not bring the object
+    // where the seed found it: it restarts there rather than learning the jump.
     bool from_seed = false;
     r = Reacquirer().Seed(images, predicted, std::move(r), &from_seed);
-    if (from_seed && r.confidence >= f.lost_confidence) predictor_->Reset(r.world_from_obj);
+    if (from_seed) predictor_->Reset(r.world_from_obj);
   }
 
   if (r.confidence >= f.lost_confidence) {

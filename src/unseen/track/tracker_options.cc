@@ -74,6 +74,8 @@ void ReacquisitionOptions::Check() const {
                "reacquisition.refine_candidates {} must be in [0, 100]", refine_candidates);
   UNSEEN_CHECK(min_score >= 0.0 && min_score <= 1.0,
                "reacquisition.min_score {} must be in [0, 1]", min_score);
+  UNSEEN_CHECK(doubtful_confidence >= 0.0 && doubtful_confidence <= 1.0,
+               "reacquisition.doubtful_confidence {} must be in [0, 1]", doubtful_confidence);
   UNSEEN_CHECK(min_seed_shift_px >= 0.0 && std::isfinite(min_seed_shift_px),
                "reacquisition.min_seed_shift_px {} must be >= 0", min_seed_shift_px);
 }
@@ -212,6 +214,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"refine_candidates", Field(&re.refine_candidates)},
         {"min_score", Field(&re.min_score)},
         {"seed_when_doubtful", Field(&re.seed_when_doubtful)},
+        {"doubtful_confidence", Field(&re.doubtful_confidence)},
         {"min_seed_shift_px", Field(&re.min_seed_shift_px)}}},
   };
   UNSEEN_CHECK(root.IsMap(), "{}: expected a map at the top level", what);

@@ -104,11 +104,13 @@ struct ReacquisitionOptions {
   int score_levels = 1;
   int refine_candidates = 2;       // best-scored candidates then aligned at full resolution
   double min_score = 0.05;         // a candidate scored below this (confidence) is not refined
-  // While tracking, a frame whose alignment is below failure.lost_confidence tries the
-  // correlation seed (around the predicted pose) before it counts as bad; confident frames
-  // pay nothing. The seed is aligned only when it moves the object at least
-  // min_seed_shift_px, pixels of the correlation level.
+  // While tracking, a frame whose alignment is below doubtful_confidence also tries the
+  // correlation seed around the predicted pose (confident frames pay nothing); the seed is
+  // aligned only when it moves the object at least min_seed_shift_px, pixels of the
+  // correlation level, and replaces the first alignment only when it reaches
+  // failure.recover_confidence and beats it.
   bool seed_when_doubtful = true;
+  double doubtful_confidence = 0.5;
   double min_seed_shift_px = 1.0;
   void Check() const;
 };
