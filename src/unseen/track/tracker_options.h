@@ -10,7 +10,7 @@
 //   pyramid:    {max_levels: 4, min_object_px: 32, max_iterations_per_level: 6}
 //   predictor:  {type: kalman, linear_accel_sigma: 2.0}
 //   failure:    {lost_confidence: 0.3, lost_after_frames: 3, recover_confidence: 0.5}
-//   reacquisition: {search_radii: 4, rotation_deg: 25, max_candidates: 16, ...}
+//   reacquisition: {search_radii: 4, rotation_deg: 25, max_candidates: 12, ...}
 //   frame_interval_s: 0.0333
 #pragma once
 
@@ -98,7 +98,7 @@ struct ReacquisitionOptions {
   // Rotation candidates: the seeds and the last good pose turned by +-rotation_deg about
   // each world axis through the object's centre, degrees; 0 = none.
   double rotation_deg = 25.0;
-  int max_candidates = 16;         // start poses scored per lost frame, in priority order
+  int max_candidates = 12;         // start poses scored per lost frame, in priority order
   // Candidates are scored by aligning them at this many of the coarsest pyramid levels
   // only (the coarse levels' confidence); the rest of the pyramid is not run for them.
   int score_levels = 1;
