@@ -7,10 +7,12 @@
 //    at a coarse level by normalised cross-correlation of gradient magnitudes after LINF
 //    (so a gain or a shading ramp does not move the peak); the shift becomes a lateral
 //    translation at the object's depth;
-//  * candidate start poses while lost: the seeds, translations around the last good pose
-//    and rotations about the object's centre, bounded in number;
-//  * cheap scoring: each candidate is aligned at the coarsest pyramid levels only, and only
-//    the best are aligned at full resolution.
+//  * candidate start poses while lost: the seeds (of the last good pose and of its turns
+//    about the object's centre, each correlated), translations around the last good pose
+//    and its turns, bounded in number;
+//  * cheap scoring: each candidate is aligned at the coarsest pyramid level(s) only, the
+//    best quarter continue one level finer at a time, and only the best one or two are
+//    aligned at full resolution.
 // Options: ReacquisitionOptions (tracker_options.h).
 #pragma once
 
@@ -102,8 +104,10 @@ class Reacquisition {
   explicit Reacquisition(Tracker* tracker);
   ~Reacquisition();
 
-  // While lost: `first` is the full alignment from `last_good`. Scores the candidates at
-  // the coarse levels, refines the best and returns the most confident of everything
+  // While lost: `first` is the full alignment from `last_good`. Correlates `last_good`
+  // and its turns, scores the candidates at the coarse levels (successive halving down to
+  // level 1), aligns the best options.refine_candidates at full resolution (stopping once
+  // one reaches failure.recover_confidence) and returns the most confident of everything
   // aligned at full resolution (summary.search_candidates = poses tried, times summed).
   TrackResult Search(const std::vector<cv::Mat>& images, const Rigid3d& last_good,
                      TrackResult first);

@@ -82,9 +82,10 @@ struct FailureOptions {
 // matched by normalised cross-correlation of gradient-magnitude images (after LINF) with
 // the input at a coarse level, and the best shifts become lateral translations at the
 // object's depth. While lost (with failure.search_when_lost), candidate start poses (the
-// seeds, translations of failure.search_offset radii along each world axis and rotations
-// about the object's centre) are aligned at the coarsest pyramid levels only; the best few
-// are then aligned at full resolution.
+// seeds of the last good pose and of its turns by rotation_deg about the object's centre,
+// translations of failure.search_offset radii along each world axis, turned poses) are
+// aligned at the coarsest pyramid levels only; the best quarter continue one level finer
+// at a time and the best refine_candidates are aligned at full resolution.
 struct ReacquisitionOptions {
   bool use_correlation = true;     // compute the 2-D correlation seed
   // The correlation runs at the coarsest pyramid level where the object's bounding sphere
