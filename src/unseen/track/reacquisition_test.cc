@@ -70,7 +70,8 @@ class Reacquire : public ::testing::Test {
     return Synthesize(cube_, rig_.cameras[0], pose, background_);
   }
   // Tracks `poses` from the first; returns the frame index from which every frame is
-  // tracked within 3 mm and 1 degree up to the end (-1: not at the end).
+  // tracked within 3 mm and 1 degree up to the end (-1: not at the end). The frames
+  // before `from` must be tracked so, confidently, without any search.
   int TrackUntilHeld(Tracker* tracker, const std::vector<Rigid3d>& poses, int from) const {
     tracker->Initialize(poses[0]);
     int held_since = -1;
@@ -81,6 +82,7 @@ class Reacquire : public ::testing::Test {
                         e.rotation_rad < 1.0 * kDeg;
       if (k < from) {
         EXPECT_TRUE(good) << "frame " << k << ": " << r.BriefReport();
+        EXPECT_EQ(r.summary.search_candidates, 0) << "frame " << k << ": " << r.BriefReport();
       }
       if (!good) {
         held_since = -1;
