@@ -108,11 +108,13 @@ struct ReacquisitionOptions {
   // While tracking, a frame whose alignment is below doubtful_confidence also tries the
   // correlation seed around the predicted pose (confident frames pay nothing); the seed is
   // aligned only when it moves the object at least min_seed_shift_px, pixels of the
-  // correlation level, and replaces the first alignment only when it reaches
+  // correlation level (a smaller shift is within the coarsest level's own reach, and an
+  // object that stays doubtful, e.g. a wrong model, would pay a second alignment every
+  // frame), and replaces the first alignment only when it reaches
   // failure.recover_confidence and beats it.
   bool seed_when_doubtful = true;
   double doubtful_confidence = 0.5;
-  double min_seed_shift_px = 1.0;
+  double min_seed_shift_px = 2.0;
   void Check() const;
 };
 
