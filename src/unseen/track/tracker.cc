@@ -10,6 +10,7 @@
 #include "unseen/image/filters.h"
 #include "unseen/image/image_io.h"
 #include "unseen/track/flow_jacobian.h"
+#include "unseen/track/reacquisition.h"
 #include "unseen/util/error.h"
 #include "unseen/util/logging.h"
 #include "unseen/util/timer.h"
@@ -139,6 +140,12 @@ void Tracker::SetModel(Mesh model) {
                               k & 4 ? hi.z() : lo.z());
   }
   model_ = std::make_shared<const Mesh>(std::move(model));
+  reacquisition_.reset();
+}
+
+Reacquisition& Tracker::Reacquirer() {
+  if (!reacquisition_) reacquisition_ = std::make_unique<Reacquisition>(this);
+  return *reacquisition_;
 }
 
 std::optional<PixelRect> Tracker::ObjectRect(const PinholeCamera& camera,
@@ -681,23 +688,17 @@ TrackResult Tracker::Track(const std::vector<cv::Mat>& images_per_camera) {
 
   TrackResult r = AlignPredicted(images, predicted);
   if (status_ == TrackStatus::kLost && f.search_when_lost && r.confidence < f.recover_confidence) {
-    // Local search around the last good pose (3.9): shifted starts along each world axis.
-    const double step = f.search_offset * sphere_radius_;
-    StageTimes times = r.summary.times;
-    int tried = 1;
-    for (int axis = 0; axis < 3; ++axis) {
-      for (double sign : {-1.0, 1.0}) {
-        Eigen::Vector3d offset = Eigen::Vector3d::Zero();
-        offset(axis) = sign * step * (axis == 2 ? 2.0 : 1.0);
-        const Rigid3d candidate(last_good_.rotation(), last_good_.translation() + offset);
-        TrackResult c = AlignChecked(images, candidate, 0);
-        times += c.summary.times;
-        ++tried;
-        if (c.confidence > r.confidence) r = std::move(c);
-      }
-    }
-    r.summary.times = times;
-    r.summary.search_candidates = tried;
+    // Re-acquisition (3.9): correlation seeds, translations and rotations around the last
+    // good pose, scored at the coarse levels, the best refined.
+    r = Reacquirer().Search(images, last_good_, std::move(r));
+  } else if (status_ == TrackStatus::kTracking && options_.reacquisition.seed_when_doubtful &&
+             r.confidence < options_.reacquisition.doubtful_confidence) {
+    // A doubtful frame may have moved beyond the pyramid's capture range: try the
+    // correlation seed before judging it. The motion model did not bring the object
+    // where the seed found it: it restarts there rather than learning the jump.
+    bool from_seed = false;
+    r = Reacquirer().Seed(images, predicted, std::move(r), &from_seed);
+    if (from_seed) predictor_->Reset(r.world_from_obj);
   }
 
   if (r.confidence >= f.lost_confidence) {

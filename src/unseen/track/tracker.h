@@ -32,6 +32,8 @@
 
 namespace unseen {
 
+class Reacquisition;
+
 // Wall-clock milliseconds spent in each stage of one frame.
 struct StageTimes {
   double predict_ms = 0, render_ms = 0, preprocess_ms = 0, select_ms = 0, solve_ms = 0;
@@ -136,6 +138,8 @@ class Tracker {
   void TransferShading(int level, CameraWork* work) const;
   // Image motion (pixels at `level`, largest over cameras) of the object under `twist`.
   double UpdatePixels(const Rigid3d& world_from_obj, const Vector6d& twist, int level) const;
+  // The re-acquisition search (reacquisition.h), made on first use for the current model.
+  Reacquisition& Reacquirer();
 
   Rig rig_;
   std::vector<Rigid3d> cam_from_world_;
@@ -154,6 +158,7 @@ class Tracker {
   Rigid3d last_good_;
   // Decaying maximum of the recent corrections, level-0 pixels (infinite: unknown).
   double recent_correction_px_ = std::numeric_limits<double>::infinity();
+  std::unique_ptr<Reacquisition> reacquisition_;
 };
 
 }  // namespace unseen

@@ -64,6 +64,31 @@ void FailureOptions::Check() const {
                "failure.search_offset {} must be in (0, 10]", search_offset);
 }
 
+void ReacquisitionOptions::Check() const {
+  UNSEEN_CHECK(seed_object_px >= 8.0 && std::isfinite(seed_object_px),
+               "reacquisition.seed_object_px {} must be >= 8", seed_object_px);
+  UNSEEN_CHECK(search_radii > 0.0 && search_radii <= 20.0,
+               "reacquisition.search_radii {} must be in (0, 20]", search_radii);
+  UNSEEN_CHECK(min_correlation >= -1.0 && min_correlation <= 1.0,
+               "reacquisition.min_correlation {} must be in [-1, 1]", min_correlation);
+  UNSEEN_CHECK(max_seeds >= 1 && max_seeds <= 8, "reacquisition.max_seeds {} must be in [1, 8]",
+               max_seeds);
+  UNSEEN_CHECK(rotation_deg >= 0.0 && rotation_deg <= 90.0,
+               "reacquisition.rotation_deg {} must be in [0, 90]", rotation_deg);
+  UNSEEN_CHECK(max_candidates >= 0 && max_candidates <= 100,
+               "reacquisition.max_candidates {} must be in [0, 100]", max_candidates);
+  UNSEEN_CHECK(score_levels >= 1 && score_levels <= 8,
+               "reacquisition.score_levels {} must be in [1, 8]", score_levels);
+  UNSEEN_CHECK(refine_candidates >= 0 && refine_candidates <= 100,
+               "reacquisition.refine_candidates {} must be in [0, 100]", refine_candidates);
+  UNSEEN_CHECK(min_score >= 0.0 && min_score <= 1.0,
+               "reacquisition.min_score {} must be in [0, 1]", min_score);
+  UNSEEN_CHECK(doubtful_confidence >= 0.0 && doubtful_confidence <= 1.0,
+               "reacquisition.doubtful_confidence {} must be in [0, 1]", doubtful_confidence);
+  UNSEEN_CHECK(min_seed_shift_px >= 0.0 && std::isfinite(min_seed_shift_px),
+               "reacquisition.min_seed_shift_px {} must be >= 0", min_seed_shift_px);
+}
+
 void TrackerOptions::Check() const {
   preprocess.Check();
   selection.Check();
@@ -71,6 +96,7 @@ void TrackerOptions::Check() const {
   pyramid.Check();
   predictor.Check();
   failure.Check();
+  reacquisition.Check();
   UNSEEN_CHECK(frame_interval_s > 0.0 && std::isfinite(frame_interval_s),
                "frame_interval_s {} must be > 0", frame_interval_s);
   UNSEEN_CHECK(threads >= 0 && threads <= 256, "threads {} must be in [0, 256]", threads);
@@ -127,6 +153,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
   PyramidOptions& py = o->pyramid;
   MotionPredictorOptions& pr = o->predictor;
   FailureOptions& fa = o->failure;
+  ReacquisitionOptions& re = o->reacquisition;
   const std::map<std::string, std::map<std::string, Setter>> sections = {
       {"preprocess",
        {{"use_linf", Field(&pp.use_linf)},
@@ -190,6 +217,20 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"recover_confidence", Field(&fa.recover_confidence)},
         {"search_when_lost", Field(&fa.search_when_lost)},
         {"search_offset", Field(&fa.search_offset)}}},
+      {"reacquisition",
+       {{"use_correlation", Field(&re.use_correlation)},
+        {"seed_object_px", Field(&re.seed_object_px)},
+        {"search_radii", Field(&re.search_radii)},
+        {"min_correlation", Field(&re.min_correlation)},
+        {"max_seeds", Field(&re.max_seeds)},
+        {"rotation_deg", Field(&re.rotation_deg)},
+        {"max_candidates", Field(&re.max_candidates)},
+        {"score_levels", Field(&re.score_levels)},
+        {"refine_candidates", Field(&re.refine_candidates)},
+        {"min_score", Field(&re.min_score)},
+        {"seed_when_doubtful", Field(&re.seed_when_doubtful)},
+        {"doubtful_confidence", Field(&re.doubtful_confidence)},
+        {"min_seed_shift_px", Field(&re.min_seed_shift_px)}}},
   };
   UNSEEN_CHECK(root.IsMap(), "{}: expected a map at the top level", what);
   for (const auto& kv : root) {
@@ -205,7 +246,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
     const auto it = sections.find(key);
     if (it == sections.end()) {
       ThrowError("{}: unknown section '{}' (known: preprocess, selection, solver, pyramid, "
-                 "predictor, failure, frame_interval_s, threads)",
+                 "predictor, failure, reacquisition, frame_interval_s, threads)",
                  what, key);
     }
     ApplySection(kv.second, what + ": " + key, it->second);

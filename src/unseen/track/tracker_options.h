@@ -11,6 +11,7 @@
 //                adaptive_levels: true}
 //   predictor:  {type: kalman, linear_accel_sigma: 2.0}
 //   failure:    {lost_confidence: 0.3, lost_after_frames: 3, recover_confidence: 0.5}
+//   reacquisition: {search_radii: 4, rotation_deg: 25, max_candidates: 12, ...}
 //   frame_interval_s: 0.0333
 //   threads: 1
 #pragma once
@@ -81,8 +82,52 @@ struct FailureOptions {
   double trust_confidence = 0.5;
   int lost_after_frames = 2;       // this many bad frames in a row: lost (hysteresis)
   double recover_confidence = 0.5; // while lost, a frame above this re-acquires
-  bool search_when_lost = true;    // try poses around the last good one while lost
-  double search_offset = 0.5;      // search step, in bounding-sphere radii
+  // While lost, search for the object (ReacquisitionOptions): correlation seeds and poses
+  // around the last good one.
+  bool search_when_lost = true;
+  double search_offset = 0.5;      // translated candidates' step, bounding-sphere radii
+  void Check() const;
+};
+
+// Re-acquisition of a lost object and seeding of motions larger than the pyramid's capture
+// range (SPEC 3.9, reacquisition.h). A 2-D correlation seed: the model rendered at a
+// reference pose (the last good pose while lost, the predicted one while tracking) is
+// matched by normalised cross-correlation of gradient-magnitude images (after LINF) with
+// the input at a coarse level, and the best shifts become lateral translations at the
+// object's depth. While lost (with failure.search_when_lost), candidate start poses (the
+// seeds of the last good pose and of its turns by rotation_deg about the object's centre,
+// translations of failure.search_offset radii along each world axis, turned poses) are
+// aligned at the coarsest pyramid levels only; the best quarter continue one level finer
+// at a time and the best refine_candidates are aligned at full resolution.
+struct ReacquisitionOptions {
+  bool use_correlation = true;     // compute the 2-D correlation seed
+  // The correlation runs at the coarsest pyramid level where the object's bounding sphere
+  // is still at least this wide, pixels of that level.
+  double seed_object_px = 24.0;
+  // Search window: the object's centre may be this many bounding-sphere radii away from
+  // where the reference pose puts it, in each image direction.
+  double search_radii = 4.0;
+  double min_correlation = 0.3;    // a correlation peak below this (NCC, [-1, 1]) is no seed
+  int max_seeds = 4;               // correlation peaks kept as seeds (over all orientations)
+  // Rotation candidates: the seeds and the last good pose turned by +-rotation_deg about
+  // each world axis through the object's centre, degrees; 0 = none.
+  double rotation_deg = 25.0;
+  int max_candidates = 12;         // start poses scored per lost frame, in priority order
+  // Candidates are scored by aligning them at this many of the coarsest pyramid levels
+  // only (the coarse levels' confidence); the rest of the pyramid is not run for them.
+  int score_levels = 1;
+  int refine_candidates = 2;       // best-scored candidates then aligned at full resolution
+  double min_score = 0.05;         // a candidate scored below this (confidence) is not refined
+  // While tracking, a frame whose alignment is below doubtful_confidence also tries the
+  // correlation seed around the predicted pose (confident frames pay nothing); the seed is
+  // aligned only when it moves the object at least min_seed_shift_px, pixels of the
+  // correlation level (a smaller shift is within the coarsest level's own reach, and an
+  // object that stays doubtful, e.g. a wrong model, would pay a second alignment every
+  // frame), and replaces the first alignment only when it reaches
+  // failure.recover_confidence and beats it.
+  bool seed_when_doubtful = true;
+  double doubtful_confidence = 0.5;
+  double min_seed_shift_px = 2.0;
   void Check() const;
 };
 
@@ -93,6 +138,7 @@ struct TrackerOptions {
   PyramidOptions pyramid;
   MotionPredictorOptions predictor;
   FailureOptions failure;
+  ReacquisitionOptions reacquisition;
   double frame_interval_s = 1.0 / 30.0;  // time between frames for the predictor, s
   // Threads for one frame (a ThreadPool): cameras are rendered, pre-processed and
   // selected in parallel; with one camera the input's pre-processing runs beside the first

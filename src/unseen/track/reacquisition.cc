@@ -1,0 +1,546 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/track/reacquisition.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <opencv2/imgproc.hpp>
+
+#include "unseen/image/filters.h"
+#include "unseen/render/rasterizer.h"
+#include "unseen/util/error.h"
+#include "unseen/util/logging.h"
+#include "unseen/util/timer.h"
+
+namespace unseen {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Gradient magnitude of the LINF-normalised (4.11), blurred image, the channels combined
+// in quadrature: a gain or a smooth shading of the input changes it little, and an edge
+// counts whatever its polarity.
+cv::Mat GradientMagnitude(const cv::Mat& bgr, const PreprocessOptions& preprocess, int level) {
+  PreprocessOptions p = preprocess;
+  p.use_linf = true;
+  PreprocessedImage pre;
+  Preprocess(bgr, p, level, true, &pre);
+  cv::Mat sq = pre.gx.mul(pre.gx) + pre.gy.mul(pre.gy);
+  cv::Mat sum;
+  cv::transform(sq, sum, cv::Matx13f(1.0f, 1.0f, 1.0f));
+  cv::sqrt(sum, sum);
+  return sum;
+}
+
+// One peak of a correlation map: template top-left position (sub-pixel) and NCC.
+struct Peak {
+  Eigen::Vector2d position;
+  double score = 0.0;
+};
+
+// Offset in (-0.5, 0.5) of the vertex of the parabola through (-1, a), (0, b), (1, c).
+double ParabolaVertex(float a, float b, float c) {
+  const double den = double(a) - 2.0 * double(b) + double(c);
+  if (!(den < 0.0)) return 0.0;
+  return std::clamp(0.5 * (double(a) - double(c)) / den, -0.5, 0.5);
+}
+
+// The `count` highest local maxima of `ncc` (CV_32FC1) at least `separation` pixels apart.
+std::vector<Peak> FindPeaks(cv::Mat ncc, int count, double separation) {
+  std::vector<Peak> peaks;
+  cv::Mat free(ncc.size(), CV_8UC1, cv::Scalar(255));
+  const int radius = std::max(1, static_cast<int>(std::ceil(separation)));
+  for (int k = 0; k < count; ++k) {
+    double best = 0.0;
+    cv::Point at;
+    cv::minMaxLoc(ncc, nullptr, &best, nullptr, &at, free);
+    if (!(best > -1.0) || at.x < 0) break;
+    Peak p;
+    p.score = best;
+    p.position = Eigen::Vector2d(at.x, at.y);
+    if (at.x > 0 && at.x + 1 < ncc.cols) {
+      const float* row = ncc.ptr<float>(at.y);
+      p.position.x() += ParabolaVertex(row[at.x - 1], row[at.x], row[at.x + 1]);
+    }
+    if (at.y > 0 && at.y + 1 < ncc.rows) {
+      p.position.y() += ParabolaVertex(ncc.at<float>(at.y - 1, at.x), ncc.at<float>(at.y, at.x),
+                                       ncc.at<float>(at.y + 1, at.x));
+    }
+    peaks.push_back(p);
+    cv::circle(free, at, radius, cv::Scalar(0), cv::FILLED);
+  }
+  return peaks;
+}
+
+// The search window of one camera at the correlation level, prepared once for every
+// orientation that is matched in it.
+struct CameraWindow {
+  bool ok = false;
+  PinholeCamera camera;  // level camera
+  Rigid3d cam_from_world;
+  double radius_px = 0.0;  // bounding sphere's projected radius, level px
+  int half = 0;            // templates are (2 half + 1)^2 around the projected centre
+  PixelRect padded;        // level pixels the feature map covers (may exceed the image)
+  cv::Mat feature;         // gradient magnitude over `padded`, 0 outside the image
+  cv::Scalar fill;         // mean colour of the window (the templates' background)
+};
+
+CameraWindow PrepareWindow(const cv::Mat& image, const RigCamera& rig_camera,
+                           const Eigen::Vector3d& centre_in_world, double sphere_radius,
+                           int level, const ReacquisitionOptions& options,
+                           const PreprocessOptions& preprocess) {
+  CameraWindow w;
+  const PinholeCamera& cam0 = rig_camera.intrinsics;
+  w.camera = cam0.PyramidLevel(level);
+  w.cam_from_world = rig_camera.cam_from_world();
+  const Eigen::Vector3d centre = w.cam_from_world * centre_in_world;
+  if (!(centre.z() > 1.5 * sphere_radius)) return w;  // behind or around the camera
+  const Eigen::Vector2d centre_px = w.camera.Project(centre);
+  w.radius_px = std::max(w.camera.fx, w.camera.fy) * sphere_radius / centre.z();
+  if (!centre_px.allFinite() || w.radius_px < 2.0) return w;
+  // Templates cover the projected bounding sphere, off-axis stretch and the blur's reach.
+  const int pad = static_cast<int>(std::ceil(3.0 * preprocess.blur_sigma_px)) + 2;
+  w.half = static_cast<int>(std::ceil(1.2 * w.radius_px)) + pad;
+  const int side = 2 * w.half + 1;
+  // The window: a template moved by up to search_radii radii each way, clipped to the
+  // image but for half a template, so that an object half out of view can be found.
+  const int reach = static_cast<int>(std::ceil(options.search_radii * w.radius_px));
+  const int x0 = static_cast<int>(std::lround(centre_px.x())) - w.half - reach;
+  const int y0 = static_cast<int>(std::lround(centre_px.y())) - w.half - reach;
+  const PixelRect wanted{x0, y0, x0 + side + 2 * reach, y0 + side + 2 * reach};
+  const PixelRect level_rect = LevelRect(cam0.width, cam0.height, level);
+  const PixelRect inside = wanted.Intersect(level_rect);
+  w.padded = wanted.Intersect(level_rect.Grow(w.half));
+  if (inside.width() < 8 || inside.height() < 8 || w.padded.width() < side ||
+      w.padded.height() < side) {
+    return w;
+  }
+  const cv::Mat window = DownsampledRegion(image, level, inside);
+  w.fill = cv::mean(window);
+  cv::copyMakeBorder(GradientMagnitude(window, preprocess, level), w.feature,
+                     inside.y0 - w.padded.y0, w.padded.y1 - inside.y1, inside.x0 - w.padded.x0,
+                     w.padded.x1 - inside.x1, cv::BORDER_CONSTANT, cv::Scalar(0));
+  w.ok = true;
+  return w;
+}
+
+// The model at `world_from_obj` matched in camera window `w`.
+struct CameraMatch {
+  bool ok = false;
+  std::vector<Peak> peaks;             // template top-left positions, best first
+  Eigen::Vector2d reference_position;  // template top-left where the pose puts it
+  Eigen::Vector3d centre_in_cam;       // bounding-sphere centre at the pose
+
+  Eigen::Vector2d Shift(const Peak& p) const { return p.position - reference_position; }
+  // Displacement of the object in the camera frame for peak `p`, depth kept.
+  Eigen::Vector3d Displacement(const CameraWindow& w, const Peak& p) const {
+    const Eigen::Vector2d pixel = w.camera.Project(centre_in_cam) + Shift(p);
+    return w.camera.Unproject(pixel, centre_in_cam.z()) - centre_in_cam;
+  }
+};
+
+CameraMatch MatchInWindow(const CameraWindow& w, const Mesh& model,
+                          const Eigen::Vector3d& sphere_centre, const Rigid3d& world_from_obj,
+                          int level, int max_peaks, const PreprocessOptions& preprocess) {
+  CameraMatch m;
+  if (!w.ok) return m;
+  const Rigid3d cam_from_obj = w.cam_from_world * world_from_obj;
+  m.centre_in_cam = cam_from_obj * sphere_centre;
+  const Eigen::Vector2d centre_px = w.camera.Project(m.centre_in_cam);
+  if (!centre_px.allFinite()) return m;
+  // Template: the model rendered 2x2 supersampled into a square around its centre, over
+  // the window's mean colour (the real background is unknown) so that the silhouette has
+  // an edge of typical contrast.
+  const int side = 2 * w.half + 1;
+  const int ox = static_cast<int>(std::lround(centre_px.x())) - w.half;
+  const int oy = static_cast<int>(std::lround(centre_px.y())) - w.half;
+  PinholeCamera template_camera = w.camera;
+  template_camera.width = template_camera.height = side;
+  template_camera.cx -= ox;
+  template_camera.cy -= oy;
+  const PinholeCamera fine = template_camera.Scaled(0.5);
+  RenderBuffers buffers;
+  Render(model, fine, cam_from_obj, fine.ImageRect(), RenderOptions(), &buffers);
+  if (buffers.mask.empty() || cv::countNonZero(buffers.mask) == 0) return m;
+  cv::Mat color, alpha, coverage;
+  cv::resize(buffers.color, color, cv::Size(side, side), 0, 0, cv::INTER_AREA);
+  buffers.mask.convertTo(coverage, CV_32F, 1.0 / 255.0);
+  cv::resize(coverage, alpha, cv::Size(side, side), 0, 0, cv::INTER_AREA);
+  cv::Mat composite(side, side, CV_32FC3);
+  for (int y = 0; y < side; ++y) {
+    const float* a = alpha.ptr<float>(y);
+    const float* c = color.ptr<float>(y);
+    float* out = composite.ptr<float>(y);
+    for (int x = 0; x < side; ++x) {
+      for (int k = 0; k < 3; ++k) out[3 * x + k] = c[3 * x + k] + (1.0f - a[x]) * float(w.fill[k]);
+    }
+  }
+  const cv::Mat template_feature = GradientMagnitude(composite, preprocess, level);
+  // Compared over the object and its silhouette's blurred edge; the rest of the square
+  // is background, unknown.
+  cv::Mat mask;
+  cv::compare(alpha, 0.0, mask, cv::CMP_GT);
+  const int edge = static_cast<int>(std::ceil(preprocess.blur_sigma_px)) + 1;
+  cv::dilate(mask, mask,
+             cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * edge + 1, 2 * edge + 1)));
+  cv::Mat ncc;
+  cv::matchTemplate(w.feature, template_feature, ncc, cv::TM_CCOEFF_NORMED, mask);
+  // Positions over a featureless window have no defined correlation.
+  cv::patchNaNs(ncc, -1.0);
+  cv::threshold(ncc, ncc, 1.0, 1.0, cv::THRESH_TRUNC);
+  m.peaks = FindPeaks(ncc, max_peaks, w.radius_px);
+  for (Peak& p : m.peaks) p.position += Eigen::Vector2d(w.padded.x0, w.padded.y0);
+  m.reference_position = Eigen::Vector2d(ox, oy);
+  m.ok = !m.peaks.empty();
+  return m;
+}
+
+}  // namespace
+
+int CorrelationLevel(double diameter_px, const ReacquisitionOptions& options) {
+  if (!(diameter_px > options.seed_object_px)) return 0;
+  return std::clamp(static_cast<int>(std::floor(std::log2(diameter_px / options.seed_object_px))),
+                    0, 7);
+}
+
+std::vector<CorrelationSeed> FindCorrelationSeeds(const std::vector<cv::Mat>& images,
+                                                  const Rig& rig, const Mesh& model,
+                                                  const Eigen::Vector3d& sphere_centre,
+                                                  double sphere_radius,
+                                                  const std::vector<Rigid3d>& references,
+                                                  const ReacquisitionOptions& options,
+                                                  const PreprocessOptions& preprocess) {
+  UNSEEN_CHECK(static_cast<int>(images.size()) == rig.size(),
+               "FindCorrelationSeeds: {} images for a rig of {} cameras", images.size(),
+               rig.size());
+  std::vector<CorrelationSeed> seeds;
+  if (references.empty()) return seeds;
+  // One level and one window per camera for all references, from the first; the level
+  // from the camera that sees the object largest.
+  const Eigen::Vector3d centre_in_world = references[0] * sphere_centre;
+  double diameter_px = 0.0;
+  for (const RigCamera& c : rig.cameras) {
+    const Eigen::Vector3d p = c.cam_from_world() * centre_in_world;
+    if (p.z() <= sphere_radius) continue;
+    diameter_px = std::max(
+        diameter_px, 2.0 * sphere_radius * std::max(c.intrinsics.fx, c.intrinsics.fy) / p.z());
+  }
+  if (diameter_px <= 0.0) return seeds;
+  const int level = CorrelationLevel(diameter_px, options);
+  std::vector<CameraWindow> windows;
+  for (int c = 0; c < rig.size(); ++c) {
+    windows.push_back(PrepareWindow(images[c], rig.cameras[c], centre_in_world, sphere_radius,
+                                    level, options, preprocess));
+  }
+
+  for (int index = 0; index < static_cast<int>(references.size()); ++index) {
+    const Rigid3d& reference = references[index];
+    std::vector<CameraMatch> matches;
+    for (int c = 0; c < rig.size(); ++c) {
+      matches.push_back(MatchInWindow(windows[c], model, sphere_centre, reference, level,
+                                      options.max_seeds, preprocess));
+    }
+    auto seed_from = [&](const std::vector<std::pair<int, const Peak*>>& used) {
+      // Weighted least squares on the world displacement d: rows 0 and 1 of each
+      // camera's rotation times d equal that camera's lateral displacement; a pull of
+      // 1e-6 of the mean weight towards d = 0 fixes the directions no camera constrains.
+      Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+      CorrelationSeed seed;
+      seed.level = level;
+      seed.reference_index = index;
+      seed.shift_px.assign(rig.size(), Eigen::Vector2d(kNaN, kNaN));
+      double weight_sum = 0.0;
+      for (const auto& [c, peak] : used) {
+        const CameraMatch& m = matches[c];
+        const double w = std::max(peak->score, 1e-3);
+        const Eigen::Vector3d d = m.Displacement(windows[c], *peak);
+        const Eigen::Matrix3d rotation = windows[c].cam_from_world.RotationMatrix();
+        for (int row = 0; row < 2; ++row) {
+          const Eigen::Vector3d a = rotation.row(row).transpose();
+          normal += w * a * a.transpose();
+          rhs += w * a * d(row);
+        }
+        seed.shift_px[c] = m.Shift(*peak);
+        seed.max_shift_px = std::max(seed.max_shift_px, seed.shift_px[c].norm());
+        seed.score += w * peak->score;
+        weight_sum += w;
+      }
+      seed.score /= weight_sum;
+      normal += 1e-6 * (weight_sum / used.size()) * Eigen::Matrix3d::Identity();
+      const Eigen::Vector3d displacement = normal.ldlt().solve(rhs);
+      seed.world_from_obj = Rigid3d(reference.rotation(), reference.translation() + displacement);
+      return seed;
+    };
+
+    std::vector<std::pair<int, const Peak*>> best;
+    int strongest = -1;
+    for (int c = 0; c < rig.size(); ++c) {
+      if (!matches[c].ok || matches[c].peaks[0].score < options.min_correlation) continue;
+      best.emplace_back(c, &matches[c].peaks[0]);
+      if (strongest < 0 || matches[c].peaks[0].score > matches[strongest].peaks[0].score) {
+        strongest = c;
+      }
+    }
+    if (best.empty()) continue;
+    seeds.push_back(seed_from(best));
+    for (size_t k = 1; k < matches[strongest].peaks.size(); ++k) {
+      const Peak& p = matches[strongest].peaks[k];
+      if (p.score < options.min_correlation) break;
+      seeds.push_back(seed_from({{strongest, &p}}));
+    }
+  }
+  std::stable_sort(seeds.begin(), seeds.end(), [](const CorrelationSeed& a,
+                                                  const CorrelationSeed& b) {
+    return a.score > b.score;
+  });
+  if (static_cast<int>(seeds.size()) > options.max_seeds) seeds.resize(options.max_seeds);
+  return seeds;
+}
+
+std::vector<CorrelationSeed> FindCorrelationSeeds(const std::vector<cv::Mat>& images,
+                                                  const Rig& rig, const Mesh& model,
+                                                  const Eigen::Vector3d& sphere_centre,
+                                                  double sphere_radius, const Rigid3d& reference,
+                                                  const ReacquisitionOptions& options,
+                                                  const PreprocessOptions& preprocess) {
+  return FindCorrelationSeeds(images, rig, model, sphere_centre, sphere_radius,
+                              std::vector<Rigid3d>{reference}, options, preprocess);
+}
+
+std::vector<Rigid3d> TurnedAboutCentre(const Rigid3d& world_from_obj,
+                                       const Eigen::Vector3d& centre_in_obj, double angle_deg) {
+  std::vector<Rigid3d> out;
+  if (angle_deg <= 0.0) return out;
+  const double angle = angle_deg * M_PI / 180.0;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (double sign : {-1.0, 1.0}) {
+      out.push_back(RotatedAboutPoint(
+          world_from_obj, ExpSO3(sign * angle * Eigen::Vector3d::Unit(axis)), centre_in_obj));
+    }
+  }
+  return out;
+}
+
+Rigid3d RotatedAboutPoint(const Rigid3d& world_from_obj, const Eigen::Quaterniond& rotation,
+                          const Eigen::Vector3d& centre_in_obj) {
+  const Eigen::Vector3d centre = world_from_obj * centre_in_obj;
+  const Eigen::Quaterniond turned = rotation * world_from_obj.rotation();
+  return Rigid3d(turned, centre - turned * centre_in_obj);
+}
+
+std::vector<Rigid3d> ReacquisitionCandidates(const Rigid3d& last_good,
+                                             const std::vector<CorrelationSeed>& seeds,
+                                             const Eigen::Vector3d& sphere_centre,
+                                             double translation_step_m,
+                                             const ReacquisitionOptions& options) {
+  std::vector<Rigid3d> out;
+  auto add = [&](const Rigid3d& pose) {
+    if (static_cast<int>(out.size()) < options.max_candidates) out.push_back(pose);
+  };
+  for (const CorrelationSeed& s : seeds) add(s.world_from_obj);
+  for (int axis = 0; axis < 3; ++axis) {
+    for (double sign : {-1.0, 1.0}) {
+      const Eigen::Vector3d offset =
+          sign * translation_step_m * (axis == 2 ? 2.0 : 1.0) * Eigen::Vector3d::Unit(axis);
+      add(Rigid3d(last_good.rotation(), last_good.translation() + offset));
+    }
+  }
+  for (const Rigid3d& p : TurnedAboutCentre(last_good, sphere_centre, options.rotation_deg)) {
+    add(p);
+  }
+  if (!seeds.empty()) {
+    for (const Rigid3d& p :
+         TurnedAboutCentre(seeds[0].world_from_obj, sphere_centre, options.rotation_deg)) {
+      add(p);
+    }
+  }
+  return out;
+}
+
+Reacquisition::Reacquisition(Tracker* tracker) : tracker_(*tracker) {
+  Eigen::Vector3f centre;
+  float radius = 0.0f;
+  tracker_.model().BoundingSphere(&centre, &radius);
+  sphere_centre_ = centre.cast<double>();
+  sphere_radius_ = radius;
+}
+
+Reacquisition::~Reacquisition() = default;
+
+Tracker& Reacquisition::CoarseTracker(int level) {
+  std::unique_ptr<Tracker>& slot = coarse_[level];
+  if (!slot) {
+    // Level `level` of the tracker's pyramid as level 0 of another: the cameras scaled by
+    // 2^-level with the size of LevelRect, the per-level settings carried over, and the
+    // iteration limits of a coarse level.
+    Rig rig = tracker_.rig();
+    for (RigCamera& c : rig.cameras) {
+      const PinholeCamera full = c.intrinsics;
+      c.intrinsics = full.PyramidLevel(level);
+      c.intrinsics.width = full.width >> level;
+      c.intrinsics.height = full.height >> level;
+    }
+    TrackerOptions o = tracker_.options();
+    o.preprocess.linf_sigma_px = o.preprocess.LinfSigmaAtLevel(level);
+    o.preprocess.shading_sigma_px = o.preprocess.ShadingSigmaAtLevel(level);
+    o.pyramid.max_iterations_per_level = o.pyramid.coarse_max_iterations;
+    o.pyramid.min_update_px = o.pyramid.coarse_min_update_px;
+    o.pyramid.supersampled_levels = std::max(0, o.pyramid.supersampled_levels - level);
+    o.failure.search_when_lost = false;
+    o.reacquisition.use_correlation = false;
+    o.reacquisition.seed_when_doubtful = false;
+    o.threads = 1;  // small images; no pool of its own
+    slot = std::make_unique<Tracker>(rig, tracker_.model(), o);
+  }
+  return *slot;
+}
+
+TrackResult Reacquisition::AlignCoarse(const std::vector<cv::Mat>& level_images, int finest,
+                                       int num_levels, const Rigid3d& start) {
+  if (finest == 0) return tracker_.Align(level_images, start, num_levels);
+  return CoarseTracker(finest).Align(level_images, start, num_levels);
+}
+
+namespace {
+
+std::vector<cv::Mat> Downsampled(const std::vector<cv::Mat>& images, int level) {
+  if (level == 0) return images;
+  std::vector<cv::Mat> out;
+  for (const cv::Mat& im : images) {
+    out.push_back(DownsampledRegion(im, level, LevelRect(im.cols, im.rows, level)));
+  }
+  return out;
+}
+
+}  // namespace
+
+TrackResult Reacquisition::ScoreCoarse(const std::vector<cv::Mat>& images,
+                                       const Rigid3d& start) {
+  const int levels = tracker_.NumLevelsFor(start);
+  const int finest = std::max(0, levels - tracker_.options().reacquisition.score_levels);
+  return AlignCoarse(Downsampled(images, finest), finest, levels - finest, start);
+}
+
+TrackResult Reacquisition::Search(const std::vector<cv::Mat>& images, const Rigid3d& last_good,
+                                  TrackResult first) {
+  const TrackerOptions& options = tracker_.options();
+  const ReacquisitionOptions& o = options.reacquisition;
+  StageTimes times = first.summary.times;
+  Timer timer;
+  std::vector<CorrelationSeed> seeds;
+  if (o.use_correlation) {
+    // The last good pose and its rotations, each located by correlation.
+    std::vector<Rigid3d> orientations{last_good};
+    for (const Rigid3d& p : TurnedAboutCentre(last_good, sphere_centre_, o.rotation_deg)) {
+      orientations.push_back(p);
+    }
+    seeds = FindCorrelationSeeds(images, tracker_.rig(), tracker_.model(), sphere_centre_,
+                                 sphere_radius_, orientations, o, options.preprocess);
+  }
+  const double correlation_ms = timer.ElapsedMilliseconds();
+  times.preprocess_ms += correlation_ms;
+  UNSEEN_LOG_DEBUG("correlation: {} seeds in {:.1f} ms", seeds.size(), correlation_ms);
+  for (const CorrelationSeed& seed : seeds) {
+    UNSEEN_LOG_DEBUG("correlation seed: shift {:.1f} px at level {}, ncc {:.2f}: {}",
+                     seed.max_shift_px, seed.level, seed.score, seed.world_from_obj.ToString());
+  }
+  const std::vector<Rigid3d> candidates = ReacquisitionCandidates(
+      last_good, seeds, sphere_centre_, options.failure.search_offset * sphere_radius_, o);
+
+  // Score every candidate at the coarse levels (the full pyramid when it has no more).
+  const int levels = tracker_.NumLevelsFor(last_good);
+  const int finest = std::max(0, levels - o.score_levels);
+  const std::vector<cv::Mat> level_images = Downsampled(images, finest);
+  struct Scored {
+    double score;
+    Rigid3d pose;
+    int order;
+  };
+  std::vector<Scored> scored;
+  TrackResult best = std::move(first);
+  for (const Rigid3d& candidate : candidates) {
+    TrackResult c = AlignCoarse(level_images, finest, levels - finest, candidate);
+    times += c.summary.times;
+    if (!c.world_from_obj.IsValid()) continue;
+    if (finest == 0) {  // already aligned at full resolution
+      if (c.confidence > best.confidence) best = std::move(c);
+      continue;
+    }
+    UNSEEN_LOG_DEBUG("candidate {}: coarse conf {:.2f} at {}", scored.size(), c.confidence,
+                     c.world_from_obj.ToString());
+    scored.push_back({c.confidence, c.world_from_obj, static_cast<int>(scored.size())});
+  }
+  auto by_score = [](const Scored& a, const Scored& b) {
+    return a.score != b.score ? a.score > b.score : a.order < b.order;
+  };
+  std::sort(scored.begin(), scored.end(), by_score);
+  // Successive halving down the pyramid: at each finer level (but the finest) a quarter of
+  // the survivors, at least refine_candidates, continue from where they converged; the
+  // finer level tells orientations apart that the coarse silhouette does not.
+  for (int level = finest - 1; level >= 1; --level) {
+    const int keep = std::max(o.refine_candidates, (static_cast<int>(scored.size()) + 3) / 4);
+    if (keep < static_cast<int>(scored.size())) scored.resize(keep);
+    while (!scored.empty() && scored.back().score < o.min_score) scored.pop_back();
+    const std::vector<cv::Mat> finer = Downsampled(images, level);
+    for (Scored& c : scored) {
+      TrackResult r = AlignCoarse(finer, level, 1, c.pose);
+      times += r.summary.times;
+      UNSEEN_LOG_DEBUG("candidate {} at level {}: conf {:.2f} at {}", c.order, level,
+                       r.confidence, r.world_from_obj.ToString());
+      if (!r.world_from_obj.IsValid()) continue;
+      c.score = r.confidence;
+      c.pose = r.world_from_obj;
+    }
+    std::sort(scored.begin(), scored.end(), by_score);
+  }
+  UNSEEN_LOG_DEBUG("scored {} candidates in {:.1f} ms", candidates.size(),
+                   timer.ElapsedMilliseconds() - correlation_ms);
+  for (int k = 0; k < static_cast<int>(scored.size()) && k < o.refine_candidates; ++k) {
+    if (best.confidence >= options.failure.recover_confidence) break;
+    if (scored[k].score < o.min_score) break;
+    TrackResult r = tracker_.Align(images, scored[k].pose);
+    times += r.summary.times;
+    UNSEEN_LOG_DEBUG("refined candidate {}: conf {:.2f} at {}", scored[k].order, r.confidence,
+                     r.world_from_obj.ToString());
+    if (r.confidence > best.confidence) best = std::move(r);
+  }
+  best.summary.times = times;
+  best.summary.search_candidates = 1 + static_cast<int>(candidates.size());
+  return best;
+}
+
+TrackResult Reacquisition::Seed(const std::vector<cv::Mat>& images, const Rigid3d& predicted,
+                                TrackResult first, bool* from_seed) {
+  const TrackerOptions& options = tracker_.options();
+  const ReacquisitionOptions& o = options.reacquisition;
+  *from_seed = false;
+  if (!o.use_correlation) return first;
+  StageTimes times = first.summary.times;
+  Timer timer;
+  const std::vector<CorrelationSeed> seeds =
+      FindCorrelationSeeds(images, tracker_.rig(), tracker_.model(), sphere_centre_,
+                           sphere_radius_, predicted, o, options.preprocess);
+  times.preprocess_ms += timer.ElapsedMilliseconds();
+  TrackResult best = std::move(first);
+  if (!seeds.empty() && seeds[0].max_shift_px >= o.min_seed_shift_px) {
+    TrackResult r = tracker_.Align(images, seeds[0].world_from_obj);
+    times += r.summary.times;
+    UNSEEN_LOG_DEBUG("correlation seed: shift {:.1f} px at level {}, ncc {:.2f}: conf {:.2f} "
+                     "(first {:.2f})",
+                     seeds[0].max_shift_px, seeds[0].level, seeds[0].score, r.confidence,
+                     best.confidence);
+    // A jump needs the evidence of a re-acquisition: a marginal pose far away is more
+    // likely a look-alike than the object.
+    if (r.confidence >= options.failure.recover_confidence && r.confidence > best.confidence) {
+      best = std::move(r);
+      *from_seed = true;
+    }
+    best.summary.search_candidates = 2;
+  }
+  best.summary.times = times;
+  return best;
+}
+
+}  // namespace unseen

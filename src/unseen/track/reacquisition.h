@@ -1,0 +1,143 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// Re-acquisition of a lost object and seeding of motions beyond the pyramid's capture
+// range (SPEC 3.9 "Larger motions: coarse-level 2-D correlation ... to seed the 6-DoF
+// solve where pyramid levels run out"):
+//  * a 2-D correlation seed: the model rendered at a reference pose is located in the input
+//    at a coarse level by normalised cross-correlation of gradient magnitudes after LINF
+//    (so a gain or a shading ramp does not move the peak); the shift becomes a lateral
+//    translation at the object's depth;
+//  * candidate start poses while lost: the seeds (of the last good pose and of its turns
+//    about the object's centre, each correlated), translations around the last good pose
+//    and its turns, bounded in number;
+//  * cheap scoring: each candidate is aligned at the coarsest pyramid level(s) only, the
+//    best quarter continue one level finer at a time, and only the best one or two are
+//    aligned at full resolution.
+// Options: ReacquisitionOptions (tracker_options.h).
+#pragma once
+
+#include <map>
+#include <memory>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "unseen/camera/camera.h"
+#include "unseen/geometry/rigid3.h"
+#include "unseen/mesh/mesh.h"
+#include "unseen/track/preprocess.h"
+#include "unseen/track/tracker.h"
+#include "unseen/track/tracker_options.h"
+
+namespace unseen {
+
+// A start pose found by the 2-D correlation.
+struct CorrelationSeed {
+  Rigid3d world_from_obj;  // the reference pose translated laterally by the shifts
+  double score = 0.0;      // NCC at the peak(s), weighted mean over the cameras used, [-1, 1]
+  int level = 0;           // pyramid level of the correlation
+  // Per camera, the displacement of the object from where the reference pose puts it,
+  // pixels of `level`; NaN for a camera that did not contribute.
+  std::vector<Eigen::Vector2d> shift_px;
+  double max_shift_px = 0.0;  // largest |shift_px| over the cameras used
+  int reference_index = 0;    // which of the reference poses was matched
+};
+
+// The pyramid level of the correlation for an object whose bounding sphere is
+// `diameter_px` wide at full resolution: the coarsest with at least options.seed_object_px.
+int CorrelationLevel(double diameter_px, const ReacquisitionOptions& options);
+
+// Locates the model (bounding sphere `sphere_centre`, `sphere_radius` in the object frame)
+// in `images` (one per rig camera, CV_32FC3 in [0, 1], full resolution) within
+// options.search_radii bounding-sphere radii of where `reference` puts it. Returns up to
+// options.max_seeds seeds with a score of at least options.min_correlation, best first.
+//
+// Several cameras: each camera's best peak gives the object's lateral displacement at its
+// depth in that camera's frame (two equations on the 3-D translation); the equations of
+// all cameras, weighted by their peak scores, are solved in least squares with a small
+// pull towards no motion, so that the direction no camera sees (the optical axis of a
+// single camera) stays as in `reference`. Further seeds come from the next peaks of the
+// camera whose best peak scored highest, alone.
+std::vector<CorrelationSeed> FindCorrelationSeeds(const std::vector<cv::Mat>& images,
+                                                  const Rig& rig, const Mesh& model,
+                                                  const Eigen::Vector3d& sphere_centre,
+                                                  double sphere_radius, const Rigid3d& reference,
+                                                  const ReacquisitionOptions& options,
+                                                  const PreprocessOptions& preprocess);
+// The same for several orientations of the object about its centre (the first's centre
+// sets the level and the search window): the options.max_seeds best seeds over all
+// references. An orientation closer to the object's matches it better.
+std::vector<CorrelationSeed> FindCorrelationSeeds(const std::vector<cv::Mat>& images,
+                                                  const Rig& rig, const Mesh& model,
+                                                  const Eigen::Vector3d& sphere_centre,
+                                                  double sphere_radius,
+                                                  const std::vector<Rigid3d>& references,
+                                                  const ReacquisitionOptions& options,
+                                                  const PreprocessOptions& preprocess);
+
+// `pose` turned by `rotation` (world frame) about the object's point `centre_in_obj`,
+// which stays where it is.
+Rigid3d RotatedAboutPoint(const Rigid3d& world_from_obj, const Eigen::Quaterniond& rotation,
+                          const Eigen::Vector3d& centre_in_obj);
+
+// `world_from_obj` turned by +-angle_deg about each world axis through the object's point
+// `centre_in_obj`: six poses (none for angle_deg <= 0).
+std::vector<Rigid3d> TurnedAboutCentre(const Rigid3d& world_from_obj,
+                                       const Eigen::Vector3d& centre_in_obj, double angle_deg);
+
+// Start poses to try while lost, most promising first, at most options.max_candidates:
+// the seeds in their order, the translations of `last_good` by +-translation_step_m along
+// each world axis (twice that along z), the rotations of `last_good` and then those of
+// the best seed by options.rotation_deg. `last_good` itself is not included.
+std::vector<Rigid3d> ReacquisitionCandidates(const Rigid3d& last_good,
+                                             const std::vector<CorrelationSeed>& seeds,
+                                             const Eigen::Vector3d& sphere_centre,
+                                             double translation_step_m,
+                                             const ReacquisitionOptions& options);
+
+// Re-acquisition for one Tracker: holds the coarse-level aligners that score candidates.
+// Uses only the tracker's public interface (Align for full-resolution refinement).
+class Reacquisition {
+ public:
+  // `tracker` must outlive this; its model and options are read at construction (make a
+  // new Reacquisition after Tracker::SetModel).
+  explicit Reacquisition(Tracker* tracker);
+  ~Reacquisition();
+
+  // While lost: `first` is the full alignment from `last_good`. Correlates `last_good`
+  // and its turns, scores the candidates at the coarse levels (successive halving down to
+  // level 1), aligns the best options.refine_candidates at full resolution (stopping once
+  // one reaches failure.recover_confidence) and returns the most confident of everything
+  // aligned at full resolution (summary.search_candidates = poses tried, times summed).
+  TrackResult Search(const std::vector<cv::Mat>& images, const Rigid3d& last_good,
+                     TrackResult first);
+  // While tracking, for a doubtful frame: `first` is the full alignment from `predicted`.
+  // Aligns from the correlation seed around `predicted` when it moves the object, and
+  // returns that alignment when it is at least failure.recover_confidence and more
+  // confident than `first` (`*from_seed` then true), else `first`.
+  TrackResult Seed(const std::vector<cv::Mat>& images, const Rigid3d& predicted,
+                   TrackResult first, bool* from_seed);
+
+  // The alignment of `start` at the coarsest options.score_levels levels of the pyramid
+  // the tracker would use at `start`, the confidence from the finest of those levels
+  // (in its pixels); `images` at full resolution. The pose is in metres as usual.
+  TrackResult ScoreCoarse(const std::vector<cv::Mat>& images, const Rigid3d& start);
+
+  const Eigen::Vector3d& sphere_centre() const { return sphere_centre_; }
+  double sphere_radius() const { return sphere_radius_; }
+
+ private:
+  // The aligner of pyramid level `level` (a tracker on the rig scaled by 2^-level).
+  Tracker& CoarseTracker(int level);
+  // Alignment of `start` with the pyramid levels [finest, finest + num_levels) given
+  // `level_images`, the frame down-sampled to `finest`.
+  TrackResult AlignCoarse(const std::vector<cv::Mat>& level_images, int finest, int num_levels,
+                          const Rigid3d& start);
+
+  Tracker& tracker_;
+  Eigen::Vector3d sphere_centre_ = Eigen::Vector3d::Zero();
+  double sphere_radius_ = 0.0;
+  std::map<int, std::unique_ptr<Tracker>> coarse_;
+};
+
+}  // namespace unseen

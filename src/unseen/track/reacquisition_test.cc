@@ -1,0 +1,277 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// Re-acquisition: the correlation seed finds a rendered object far from its reference
+// pose, and the tracker brings back an object that jumped beyond the pyramid's capture
+// range (with and without a large rotation) or left the view and came back.
+#include "unseen/track/reacquisition.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "unseen/mesh/primitives.h"
+#include "unseen/render/rasterizer.h"
+
+namespace unseen {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+Rig OneCameraRig() {
+  Rig rig;
+  rig.cameras.push_back({"cam0", PinholeCamera::Centered(512, 256, 837.3), Rigid3d()});
+  return rig;
+}
+
+// A smooth, mildly textured background.
+cv::Mat Background(const PinholeCamera& cam, int seed) {
+  cv::RNG rng(seed);
+  cv::Mat small(cam.height / 32 + 1, cam.width / 32 + 1, CV_32FC3);
+  rng.fill(small, cv::RNG::UNIFORM, 0.3, 0.8);
+  cv::Mat out;
+  cv::resize(small, out, cv::Size(cam.width, cam.height), 0, 0, cv::INTER_CUBIC);
+  return out;
+}
+
+// The model rendered at `world_from_obj` over `background`, 2x2 supersampled.
+cv::Mat Synthesize(const Mesh& mesh, const RigCamera& camera, const Rigid3d& world_from_obj,
+                   const cv::Mat& background) {
+  const PinholeCamera fine = camera.intrinsics.Scaled(0.5);
+  RenderBuffers buffers;
+  Render(mesh, fine, camera.cam_from_world() * world_from_obj, fine.ImageRect(), RenderOptions(),
+         &buffers);
+  cv::Mat big;
+  cv::resize(background, big, cv::Size(fine.width, fine.height), 0, 0, cv::INTER_LINEAR);
+  buffers.color.copyTo(big, buffers.mask);
+  cv::Mat out;
+  cv::resize(big, out, cv::Size(camera.intrinsics.width, camera.intrinsics.height), 0, 0,
+             cv::INTER_AREA);
+  return out;
+}
+
+Rigid3d CubePose() {
+  return Rigid3d(ExpSO3(Eigen::Vector3d(0.45, 0.7, 0.1)), Eigen::Vector3d(-0.08, 0.0, 1.0));
+}
+
+class Reacquire : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    rig_ = OneCameraRig();
+    cube_ = MakeLetteredCube(0.096, 128);
+    background_ = Background(rig_.cameras[0].intrinsics, 3);
+    Eigen::Vector3f centre;
+    float radius;
+    cube_.BoundingSphere(&centre, &radius);
+    centre_ = centre.cast<double>();
+    radius_ = radius;
+  }
+  cv::Mat Image(const Rigid3d& pose) const {
+    return Synthesize(cube_, rig_.cameras[0], pose, background_);
+  }
+  // Tracks `poses` from the first; returns the frame index from which every frame is
+  // tracked within 3 mm and 1 degree up to the end (-1: not at the end). The frames
+  // before `from` must be tracked so, confidently, without any search.
+  int TrackUntilHeld(Tracker* tracker, const std::vector<Rigid3d>& poses, int from) const {
+    tracker->Initialize(poses[0]);
+    int held_since = -1;
+    for (int k = 0; k < static_cast<int>(poses.size()); ++k) {
+      const TrackResult r = tracker->Track({Image(poses[k])});
+      const PoseDifference e = Difference(r.world_from_obj, poses[k]);
+      const bool good = r.status == TrackStatus::kTracking && e.translation < 0.003 &&
+                        e.rotation_rad < 1.0 * kDeg;
+      if (k < from) {
+        EXPECT_TRUE(good) << "frame " << k << ": " << r.BriefReport();
+        EXPECT_EQ(r.summary.search_candidates, 0) << "frame " << k << ": " << r.BriefReport();
+      }
+      if (!good) {
+        held_since = -1;
+      } else if (held_since < 0) {
+        held_since = k;
+      }
+    }
+    return held_since;
+  }
+  Rig rig_;
+  Mesh cube_;
+  cv::Mat background_;
+  Eigen::Vector3d centre_;
+  double radius_ = 0.0;
+};
+
+TEST_F(Reacquire, CorrelationFindsAKnownShiftDespiteAGainChange) {
+  const Rigid3d truth = CubePose();
+  // The reference is 120 mm right and 50 mm down of the object: ~100 px and ~42 px.
+  const Rigid3d reference(truth.rotation(),
+                          truth.translation() + Eigen::Vector3d(0.12, 0.05, 0.0));
+  const cv::Mat image = Image(truth);
+  cv::Mat darker = image * 0.45;  // a gain, and a shading ramp across the image
+  for (int x = 0; x < darker.cols; ++x) darker.col(x) *= 0.6 + 0.8 * x / double(darker.cols);
+  ReacquisitionOptions options;
+  const PreprocessOptions preprocess;
+  for (const cv::Mat& input : {image, darker}) {
+    const std::vector<CorrelationSeed> seeds = FindCorrelationSeeds(
+        {input}, rig_, cube_, centre_, radius_, reference, options, preprocess);
+    ASSERT_FALSE(seeds.empty());
+    const CorrelationSeed& s = seeds[0];
+    // The expected shift, pixels of the correlation level.
+    const PinholeCamera cam = rig_.cameras[0].intrinsics.PyramidLevel(s.level);
+    const Eigen::Vector2d expected =
+        cam.Project(truth * centre_) - cam.Project(reference * centre_);
+    EXPECT_GE(s.level, 1);
+    EXPECT_GT(expected.norm(), 20.0);
+    EXPECT_LT((s.shift_px[0] - expected).norm(), 1.0)
+        << "found " << s.shift_px[0].transpose() << " expected " << expected.transpose();
+    EXPECT_GT(s.score, 0.5);
+    // Depth kept, the lateral translation recovered to a pixel of that level.
+    const double px_m = (1 << s.level) * 1.0 / 837.3;
+    EXPECT_LT(Difference(s.world_from_obj, truth).translation, 1.5 * px_m);
+    EXPECT_DOUBLE_EQ(s.world_from_obj.translation().z(), reference.translation().z());
+  }
+}
+
+TEST_F(Reacquire, CorrelationWithTwoCamerasRecoversTheThreeDShift) {
+  Rig rig = rig_;
+  const Rigid3d right(ExpSO3(Eigen::Vector3d(0, -std::atan2(0.5, 1.0), 0)),
+                      Eigen::Vector3d(0.5, 0.0, 0.0));
+  rig.cameras.push_back({"right", rig_.cameras[0].intrinsics, right});
+  const Rigid3d truth = CubePose();
+  // Moved in depth too: only two cameras together see that.
+  const Rigid3d reference(truth.rotation(),
+                          truth.translation() + Eigen::Vector3d(0.06, -0.03, 0.10));
+  std::vector<cv::Mat> images;
+  for (const RigCamera& c : rig.cameras) {
+    images.push_back(Synthesize(cube_, c, truth, background_));
+  }
+  const std::vector<CorrelationSeed> seeds = FindCorrelationSeeds(
+      images, rig, cube_, centre_, radius_, reference, {}, PreprocessOptions());
+  ASSERT_FALSE(seeds.empty());
+  EXPECT_TRUE(seeds[0].shift_px[0].allFinite());
+  EXPECT_TRUE(seeds[0].shift_px[1].allFinite());
+  // Far closer than the reference in all three directions (the lateral model is linear,
+  // so a depth change leaves a residual of a few millimetres).
+  EXPECT_LT(Difference(seeds[0].world_from_obj, truth).translation, 0.025)
+      << seeds[0].world_from_obj.ToString();
+}
+
+TEST_F(Reacquire, CandidatesAreBoundedAndTurnAboutTheCentre) {
+  const Rigid3d last_good = CubePose();
+  CorrelationSeed seed;
+  seed.world_from_obj = Rigid3d(last_good.rotation(),
+                                last_good.translation() + Eigen::Vector3d(0.1, 0, 0));
+  ReacquisitionOptions options;
+  options.max_candidates = 100;
+  options.rotation_deg = 25.0;
+  const std::vector<Rigid3d> all =
+      ReacquisitionCandidates(last_good, {seed}, centre_, 0.04, options);
+  EXPECT_EQ(all.size(), 1u + 6u + 6u + 6u);
+  EXPECT_LT(Difference(all[0], seed.world_from_obj).translation, 1e-12);
+  int rotated = 0;
+  for (const Rigid3d& c : all) {
+    const double angle = AngleBetween(c.rotation(), last_good.rotation());
+    if (angle > 1e-9) {
+      EXPECT_NEAR(angle, 25.0 * kDeg, 1e-9);
+      // The object's centre stays where the base pose put it.
+      const double to_seed = (c * centre_ - seed.world_from_obj * centre_).norm();
+      const double to_last = (c * centre_ - last_good * centre_).norm();
+      EXPECT_LT(std::min(to_seed, to_last), 1e-12);
+      ++rotated;
+    }
+  }
+  EXPECT_EQ(rotated, 12);
+  options.max_candidates = 5;
+  EXPECT_EQ(ReacquisitionCandidates(last_good, {seed}, centre_, 0.04, options).size(), 5u);
+  options.rotation_deg = 0.0;
+  options.max_candidates = 100;
+  EXPECT_EQ(ReacquisitionCandidates(last_good, {}, centre_, 0.04, options).size(), 6u);
+}
+
+TEST_F(Reacquire, CoarseScoreIsHighAtTheTruthAndLowFarFromIt) {
+  Tracker tracker(rig_, cube_);
+  Reacquisition reacquisition(&tracker);
+  const Rigid3d truth = CubePose();
+  const cv::Mat image = Image(truth);
+  const TrackResult near = reacquisition.ScoreCoarse(
+      {image}, Rigid3d(truth.rotation(), truth.translation() + Eigen::Vector3d(0.01, 0, 0)));
+  const TrackResult far = reacquisition.ScoreCoarse(
+      {image}, Rigid3d(truth.rotation(), truth.translation() + Eigen::Vector3d(0.2, 0, 0)));
+  EXPECT_LT(near.summary.num_levels, tracker.NumLevelsFor(truth));
+  // Within about a pixel of the coarse level (5 mm).
+  EXPECT_LT(Difference(near.world_from_obj, truth).translation, 0.008) << near.BriefReport();
+  EXPECT_GT(near.confidence, 0.3) << near.BriefReport();
+  EXPECT_GT(near.confidence, far.confidence + 0.2) << far.BriefReport();
+}
+
+// Frames of a still object that jumps by `jump` (and turns by `turn` about its centre)
+// after `before` frames and stays there for `after` frames.
+std::vector<Rigid3d> JumpSequence(const Rigid3d& start, const Eigen::Vector3d& jump,
+                                  const Eigen::Vector3d& turn, const Eigen::Vector3d& centre,
+                                  int before, int after) {
+  std::vector<Rigid3d> poses(before, start);
+  Rigid3d moved(start.rotation(), start.translation() + jump);
+  moved = RotatedAboutPoint(moved, ExpSO3(turn), centre);
+  poses.insert(poses.end(), after, moved);
+  return poses;
+}
+
+TEST_F(Reacquire, AJumpBeyondThePyramidsReachIsReacquired) {
+  // 150 mm right and 40 mm up in one frame: ~125 px, far beyond the ~20 px the pyramid
+  // brings back.
+  const std::vector<Rigid3d> poses = JumpSequence(
+      CubePose(), Eigen::Vector3d(0.15, -0.04, 0.0), Eigen::Vector3d::Zero(), centre_, 4, 8);
+  Tracker with(rig_, cube_);
+  const int held = TrackUntilHeld(&with, poses, 4);
+  EXPECT_GE(held, 0);
+  EXPECT_LE(held, 7);
+  // Without the correlation seed and the rotations, the translated starts of the old
+  // search do not reach it.
+  TrackerOptions off;
+  off.reacquisition.use_correlation = false;
+  off.reacquisition.rotation_deg = 0.0;
+  Tracker without(rig_, cube_, off);
+  EXPECT_EQ(TrackUntilHeld(&without, poses, 4), -1);
+}
+
+TEST_F(Reacquire, AJumpWithARotationIsReacquiredByTheRotationCandidates) {
+  // The jump and a turn of 25 degrees about the optical axis, or 30 about the horizontal.
+  for (const Eigen::Vector3d& turn :
+       {Eigen::Vector3d(0.0, 0.0, 25.0 * kDeg), Eigen::Vector3d(30.0 * kDeg, 0.0, 0.0)}) {
+    const std::vector<Rigid3d> poses =
+        JumpSequence(CubePose(), Eigen::Vector3d(0.13, 0.03, 0.0), turn, centre_, 4, 8);
+    Tracker with(rig_, cube_);
+    const int held = TrackUntilHeld(&with, poses, 4);
+    EXPECT_GE(held, 0) << turn.transpose();
+    EXPECT_LE(held, 7) << turn.transpose();
+    TrackerOptions no_rotations;
+    no_rotations.reacquisition.rotation_deg = 0.0;
+    Tracker without(rig_, cube_, no_rotations);
+    EXPECT_EQ(TrackUntilHeld(&without, poses, 4), -1) << turn.transpose();
+  }
+}
+
+TEST_F(Reacquire, AnObjectThatLeftTheViewIsReacquiredWhenItComesBack) {
+  Tracker tracker(rig_, cube_);
+  const Rigid3d start = CubePose();
+  tracker.Initialize(start);
+  TrackResult r;
+  for (int k = 0; k < 3; ++k) {
+    r = tracker.Track({Image(start)});
+    EXPECT_EQ(r.status, TrackStatus::kTracking);
+  }
+  // Gone: an empty background for a while.
+  for (int k = 0; k < 6; ++k) r = tracker.Track({background_});
+  EXPECT_EQ(r.status, TrackStatus::kLost);
+  EXPECT_LT(r.confidence, 0.3);
+  // Back 140 mm left and 30 mm lower, and turned by 10 degrees.
+  Rigid3d back(start.rotation(), start.translation() + Eigen::Vector3d(0.14, 0.03, 0.0));
+  back = RotatedAboutPoint(back, ExpSO3(Eigen::Vector3d(0.0, 0.0, 10.0 * kDeg)), centre_);
+  int frames = 0;
+  for (; frames < 4 && r.status == TrackStatus::kLost; ++frames) r = tracker.Track({Image(back)});
+  EXPECT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
+  EXPECT_LE(frames, 2);
+  r = tracker.Track({Image(back)});
+  EXPECT_LT(Difference(r.world_from_obj, back).translation, 0.003) << r.BriefReport();
+}
+
+}  // namespace
+}  // namespace unseen
