@@ -520,7 +520,7 @@ TrackResult Tracker::Track(const std::vector<cv::Mat>& images_per_camera) {
       status_ = TrackStatus::kLost;
       predictor_->Reset(last_good_);
     } else if (r.confidence >= f.lost_confidence) {
-      if (r.confidence >= f.trust_confidence) predictor_->Correct(r.world_from_obj);
+      predictor_->Correct(r.world_from_obj, r.confidence);  // weighed by the confidence
       last_good_ = r.world_from_obj;
     }
   } else if (r.confidence >= f.recover_confidence) {

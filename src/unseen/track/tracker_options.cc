@@ -44,8 +44,6 @@ void FailureOptions::Check() const {
   UNSEEN_CHECK(min_pixels >= 6, "failure.min_pixels {} must be >= 6", min_pixels);
   UNSEEN_CHECK(lost_confidence >= 0.0 && lost_confidence <= 1.0,
                "failure.lost_confidence {} must be in [0, 1]", lost_confidence);
-  UNSEEN_CHECK(trust_confidence >= 0.0 && trust_confidence <= 1.0,
-               "failure.trust_confidence {} must be in [0, 1]", trust_confidence);
   UNSEEN_CHECK(recover_confidence >= lost_confidence && recover_confidence <= 1.0,
                "failure.recover_confidence {} must be in [lost_confidence = {}, 1]",
                recover_confidence, lost_confidence);
@@ -160,7 +158,9 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"linear_accel_sigma", Field(&pr.linear_accel_sigma)},
         {"angular_accel_sigma", Field(&pr.angular_accel_sigma)},
         {"position_sigma", Field(&pr.position_sigma)},
-        {"rotation_sigma", Field(&pr.rotation_sigma)}}},
+        {"rotation_sigma", Field(&pr.rotation_sigma)},
+        {"min_confidence", Field(&pr.min_confidence)},
+        {"confidence_power", Field(&pr.confidence_power)}}},
       {"failure",
        {{"min_share", Field(&fa.min_share)},
         {"good_share", Field(&fa.good_share)},
@@ -171,7 +171,6 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"min_pixels", Field(&fa.min_pixels)},
         {"lost_confidence", Field(&fa.lost_confidence)},
         {"lost_after_frames", Field(&fa.lost_after_frames)},
-        {"trust_confidence", Field(&fa.trust_confidence)},
         {"recover_confidence", Field(&fa.recover_confidence)},
         {"search_when_lost", Field(&fa.search_when_lost)},
         {"search_offset", Field(&fa.search_offset)}}},

@@ -8,7 +8,7 @@
 //                use_occlusion_rejection: true, ...}
 //   solver:     {kernel: huber, kernel_width: 1.345, irls_iterations: 2}
 //   pyramid:    {max_levels: 4, min_object_px: 32, max_iterations_per_level: 6}
-//   predictor:  {type: kalman, linear_accel_sigma: 2.0}
+//   predictor:  {type: kalman, linear_accel_sigma: 2.0, min_confidence: 0.5}
 //   failure:    {lost_confidence: 0.3, lost_after_frames: 3, recover_confidence: 0.5}
 //   frame_interval_s: 0.0333
 #pragma once
@@ -62,10 +62,6 @@ struct FailureOptions {
   double bad_update_px = 2.0;
   int min_pixels = 40;
   double lost_confidence = 0.25;   // a frame below this is bad
-  // Only poses at least this confident update the motion predictor; below it the
-  // predictor coasts, so that a doubtful solve (an occluder, a drifting depth) does not
-  // teach it a velocity that carries the next frames further away.
-  double trust_confidence = 0.5;
   int lost_after_frames = 2;       // this many bad frames in a row: lost (hysteresis)
   double recover_confidence = 0.5; // while lost, a frame above this re-acquires
   bool search_when_lost = true;    // try poses around the last good one while lost

@@ -29,7 +29,7 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
       "selection: {color_mode: raw, use_occlusion_rejection: false}\n"
       "solver: {kernel: tukey, kernel_width: 4.685}\n"
       "pyramid: {max_levels: 2}\n"
-      "predictor: {type: none}\n"
+      "predictor: {type: none, min_confidence: 0.4, confidence_power: 2}\n"
       "failure: {lost_after_frames: 5}\n"
       "frame_interval_s: 0.04\n");
   EXPECT_FALSE(o.preprocess.use_linf);
@@ -39,6 +39,8 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
   EXPECT_EQ(o.solver.kernel, RobustKernel::kTukey);
   EXPECT_EQ(o.pyramid.max_levels, 2);
   EXPECT_EQ(o.predictor.type, PredictorType::kHold);
+  EXPECT_DOUBLE_EQ(o.predictor.min_confidence, 0.4);
+  EXPECT_DOUBLE_EQ(o.predictor.confidence_power, 2.0);
   EXPECT_EQ(o.failure.lost_after_frames, 5);
   EXPECT_DOUBLE_EQ(o.frame_interval_s, 0.04);
   EXPECT_DOUBLE_EQ(o.selection.max_normal_flow_px, 1.22);  // untouched default
