@@ -48,12 +48,14 @@ std::string SolveSummary::BriefReport() const {
     iters += fmt::format("{}{}", iters.empty() ? "" : "/", iterations_per_level[l]);
   }
   return fmt::format(
-      "levels {} iters {} | px cand {} grad- {} occ- {}/{}/{} undir- {} flow- {} used {} "
-      "(share {:.2f}) | res {:.3f}->{:.3f} px, last upd {:.3f} px, corr {:.1f} px{} | ms "
-      "pred {:.3f} rend {:.3f} pre {:.3f} sel {:.3f} solve {:.3f} total {:.3f}",
+      "levels {} iters {} | px cand {} grad- {} occ- {}/{}/{} undir- {} flow- {} block- {} "
+      "used {} (share {:.2f} block {:.2f}) | res {:.3f}->{:.3f} px, last upd {:.3f} px, "
+      "corr {:.1f} px{} | ms pred {:.3f} rend {:.3f} pre {:.3f} sel {:.3f} solve {:.3f} "
+      "total {:.3f}",
       num_levels, iters, counts.candidates, counts.rejected_gradient,
       counts.rejected_input_gradient, counts.rejected_direction, counts.rejected_magnitude,
-      counts.rejected_undirected, counts.rejected_normal_flow, counts.used, share,
+      counts.rejected_undirected, counts.rejected_normal_flow, counts.rejected_block, counts.used,
+      share, counts.BlockShare(),
       initial_residual_px, final_residual_px, last_update_px, correction_px,
       search_candidates ? fmt::format(", searched {}", search_candidates) : std::string(),
       times.predict_ms, times.render_ms, times.preprocess_ms, times.select_ms, times.solve_ms,

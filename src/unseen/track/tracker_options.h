@@ -5,7 +5,7 @@
 //
 //   preprocess: {use_linf: true, linf_sigma_px: 8, linf_epsilon: 0.05, blur_sigma_px: 1.8}
 //   selection:  {color_mode: redundancy, min_gradient_sq: 984e-6, max_normal_flow_px: 1.22,
-//                use_occlusion_rejection: true, ...}
+//                use_occlusion_rejection: true, block_min_share_ratio: 0.5, ...}
 //   solver:     {kernel: huber, kernel_width: 1.345, irls_iterations: 2}
 //   pyramid:    {max_levels: 4, min_object_px: 32, max_iterations_per_level: 6}
 //   predictor:  {type: kalman, linear_accel_sigma: 2.0, min_confidence: 0.5}

@@ -26,7 +26,7 @@ TEST(TrackerOptions, DefaultsAreTheThesisValues) {
 TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
   const TrackerOptions o = ParseTrackerOptions(
       "preprocess: {use_linf: false, blur_sigma_px: 2.5}\n"
-      "selection: {color_mode: raw, use_occlusion_rejection: false}\n"
+      "selection: {color_mode: raw, use_occlusion_rejection: false, block_min_share_ratio: 0}\n"
       "solver: {kernel: tukey, kernel_width: 4.685}\n"
       "pyramid: {max_levels: 2}\n"
       "predictor: {type: none, min_confidence: 0.4, confidence_power: 2}\n"
@@ -41,6 +41,7 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
   EXPECT_EQ(o.predictor.type, PredictorType::kHold);
   EXPECT_DOUBLE_EQ(o.predictor.min_confidence, 0.4);
   EXPECT_DOUBLE_EQ(o.predictor.confidence_power, 2.0);
+  EXPECT_DOUBLE_EQ(o.selection.block_min_share_ratio, 0.0);
   EXPECT_EQ(o.failure.lost_after_frames, 5);
   EXPECT_DOUBLE_EQ(o.frame_interval_s, 0.04);
   EXPECT_DOUBLE_EQ(o.selection.max_normal_flow_px, 1.22);  // untouched default
