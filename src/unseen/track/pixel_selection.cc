@@ -102,12 +102,14 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
   const int block_cols = (w + block - 1) / block, block_rows = (h + block - 1) / block;
   std::vector<int> block_gradient(block_cols * block_rows, 0);
   std::vector<int> block_used(block_cols * block_rows, 0);
+  std::vector<int> block_passed(block_cols * block_rows, 0);  // passed (4.13)-(4.15)
   const int first_row = out->size();
   std::vector<int> row_block;  // block of each row appended here
 
   for (int y = 0; y < h; ++y) {
     int* row_gradient = block_gradient.data() + (y / block) * block_cols;
     int* row_used = block_used.data() + (y / block) * block_cols;
+    int* row_passed = block_passed.data() + (y / block) * block_cols;
     const uint8_t* reg = in.region->ptr<uint8_t>(y);
     const float* dep = in.depth->ptr<float>(y);
     const float* vb = v.blurred.ptr<float>(y);
@@ -195,6 +197,7 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
           ++c.rejected_magnitude;
           continue;
         }
+        ++row_passed[x / block];
       }
 
       const float px = float(in.roi.x0 + x);
@@ -279,10 +282,12 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
     c.block_used += block_used[b];
   }
   if (occlusion && options.block_min_share_ratio > 0.0) {
+    // Shares of the occlusion tests alone: a misalignment also fails the normal-flow bound
+    // (4.9), in whole blocks along the silhouette, which must stay to bring the pose back.
     std::vector<float> shares;
     for (size_t b = 0; b < block_gradient.size(); ++b) {
       if (block_gradient[b] >= options.block_min_gradient) {
-        shares.push_back(float(block_used[b]) / float(block_gradient[b]));
+        shares.push_back(float(block_passed[b]) / float(block_gradient[b]));
       }
     }
     if (!shares.empty() && static_cast<int>(shares.size()) >= options.block_min_blocks) {
@@ -292,7 +297,7 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
       std::vector<uint8_t> drop(block_gradient.size(), 0);
       for (size_t b = 0; b < block_gradient.size(); ++b) {
         drop[b] = block_gradient[b] >= options.block_min_gradient &&
-                  float(block_used[b]) < min_share * float(block_gradient[b]);
+                  float(block_passed[b]) < min_share * float(block_gradient[b]);
         if (drop[b]) {
           c.rejected_block += block_used[b];
           c.used -= block_used[b];

@@ -47,14 +47,15 @@ struct PixelSelectionOptions {
   int block_px = 8;
   int block_min_gradient = 8;
   // Block occlusion rejection (with use_occlusion_rejection): the pixels of a counted block
-  // whose survival share is below block_min_share_ratio times the median share of the
-  // counted blocks are dropped too (those of an occluder that passed the per-pixel tests by
-  // chance); 0 disables it. A misaligned pose lowers the share of every block alike, so it
-  // drops few blocks. It needs at least block_min_blocks counted blocks: the median of a
-  // few blocks of a small or coarse image says little, and there a misalignment (the
-  // coarse levels' job) leaves whole blocks of edges unmatched.
+  // where the share of gradient pixels passing the occlusion tests (4.13)-(4.15) is below
+  // block_min_share_ratio times the median share of the counted blocks are dropped too
+  // (those of an occluder that passed the per-pixel tests by chance); 0 disables it. A
+  // misaligned pose lowers the share of every block alike, so it drops few blocks; the
+  // normal-flow bound (4.9), which a misalignment fails in whole blocks along the
+  // silhouette, does not count. It needs at least block_min_blocks counted blocks: the
+  // median of a few blocks of a small or coarse image says little.
   double block_min_share_ratio = 0.5;
-  int block_min_blocks = 64;
+  int block_min_blocks = 32;
   void Check() const;
 };
 
