@@ -111,6 +111,7 @@ void Tracker::Initialize(const Rigid3d& world_from_obj) {
   last_good_ = world_from_obj;
   status_ = TrackStatus::kTracking;
   bad_frames_ = 0;
+  residual_reference_px_ = 0.0;
   initialized_ = true;
 }
 
@@ -175,10 +176,16 @@ std::vector<cv::Mat> Tracker::CheckImages(const std::vector<cv::Mat>& images) co
 double Tracker::Confidence(const SolveSummary& s) const {
   const FailureOptions& f = options_.failure;
   if (s.equations < f.min_pixels || s.counts.gradient_pixels() <= 0) return 0.0;
-  const double share_term = Ramp(s.share, f.min_share, f.good_share);
-  const double residual_term = Ramp(s.initial_residual_px, f.bad_residual_px, f.good_residual_px);
+  const double support_term = std::max(Ramp(s.share, f.min_share, f.good_share),
+                                       Ramp(double(s.counts.used), f.min_used_px, f.good_used_px));
+  double residual_term = Ramp(s.initial_residual_px, f.bad_residual_px, f.good_residual_px);
+  if (residual_reference_px_ > 0.0) {
+    const double reference = std::max(residual_reference_px_, f.min_reference_residual_px);
+    residual_term *= Ramp(s.initial_residual_px / reference, f.bad_residual_ratio,
+                          f.good_residual_ratio);
+  }
   const double update_term = Ramp(s.last_update_px, f.bad_update_px, f.good_update_px);
-  return share_term * residual_term * update_term;
+  return support_term * residual_term * update_term;
 }
 
 TrackResult Tracker::Align(const std::vector<cv::Mat>& images, const Rigid3d& world_from_obj,
@@ -530,6 +537,17 @@ TrackResult Tracker::Track(const std::vector<cv::Mat>& images_per_camera) {
     bad_frames_ = 0;
     predictor_->Reset(r.world_from_obj);
     last_good_ = r.world_from_obj;
+  }
+  // The reference residual follows the confident frames that fit about as well as it, so
+  // that a drift into a worse fit does not raise it; it is kept while lost, to judge the
+  // re-acquired pose by the same floor.
+  const double residual = r.summary.initial_residual_px;
+  if (status_ == TrackStatus::kTracking && r.confidence >= f.recover_confidence) {
+    if (residual_reference_px_ <= 0.0) {
+      residual_reference_px_ = residual;
+    } else if (residual < f.good_residual_ratio * residual_reference_px_) {
+      residual_reference_px_ += f.residual_reference_rate * (residual - residual_reference_px_);
+    }
   }
   r.status = status_;
   if (status_ == TrackStatus::kLost) r.world_from_obj = last_good_;

@@ -124,6 +124,8 @@ class Tracker {
   TrackStatus status_ = TrackStatus::kTracking;
   int bad_frames_ = 0;
   Rigid3d last_good_;
+  // Running mean of the residual of the confident frames (FailureOptions); 0 = none yet.
+  double residual_reference_px_ = 0.0;
 };
 
 }  // namespace unseen

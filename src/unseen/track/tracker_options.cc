@@ -35,6 +35,16 @@ void PyramidOptions::Check() const {
 void FailureOptions::Check() const {
   UNSEEN_CHECK(min_share >= 0.0 && good_share > min_share && good_share <= 1.0,
                "failure: need 0 <= min_share ({}) < good_share ({}) <= 1", min_share, good_share);
+  UNSEEN_CHECK(min_used_px >= 0.0 && good_used_px > min_used_px,
+               "failure: need 0 <= min_used_px ({}) < good_used_px ({})", min_used_px,
+               good_used_px);
+  UNSEEN_CHECK(good_residual_ratio >= 1.0 && bad_residual_ratio > good_residual_ratio,
+               "failure: need 1 <= good_residual_ratio ({}) < bad_residual_ratio ({})",
+               good_residual_ratio, bad_residual_ratio);
+  UNSEEN_CHECK(residual_reference_rate > 0.0 && residual_reference_rate <= 1.0,
+               "failure.residual_reference_rate {} must be in (0, 1]", residual_reference_rate);
+  UNSEEN_CHECK(min_reference_residual_px > 0.0 && std::isfinite(min_reference_residual_px),
+               "failure.min_reference_residual_px {} must be > 0", min_reference_residual_px);
   UNSEEN_CHECK(good_residual_px >= 0.0 && bad_residual_px > good_residual_px,
                "failure: need 0 <= good_residual_px ({}) < bad_residual_px ({})",
                good_residual_px, bad_residual_px);
@@ -168,7 +178,13 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
       {"failure",
        {{"min_share", Field(&fa.min_share)},
         {"good_share", Field(&fa.good_share)},
+        {"min_used_px", Field(&fa.min_used_px)},
+        {"good_used_px", Field(&fa.good_used_px)},
         {"good_residual_px", Field(&fa.good_residual_px)},
+        {"good_residual_ratio", Field(&fa.good_residual_ratio)},
+        {"bad_residual_ratio", Field(&fa.bad_residual_ratio)},
+        {"residual_reference_rate", Field(&fa.residual_reference_rate)},
+        {"min_reference_residual_px", Field(&fa.min_reference_residual_px)},
         {"bad_residual_px", Field(&fa.bad_residual_px)},
         {"good_update_px", Field(&fa.good_update_px)},
         {"bad_update_px", Field(&fa.bad_update_px)},

@@ -9,7 +9,8 @@
 //   solver:     {kernel: huber, kernel_width: 1.345, irls_iterations: 2}
 //   pyramid:    {max_levels: 4, min_object_px: 32, max_iterations_per_level: 6}
 //   predictor:  {type: kalman, linear_accel_sigma: 2.0, min_confidence: 0.5}
-//   failure:    {lost_confidence: 0.3, lost_after_frames: 3, recover_confidence: 0.5}
+//   failure:    {lost_confidence: 0.25, lost_after_frames: 2, recover_confidence: 0.5,
+//                good_used_px: 2500, bad_residual_ratio: 1.75, ...}
 //   frame_interval_s: 0.0333
 #pragma once
 
@@ -46,18 +47,32 @@ struct PyramidOptions {
 };
 
 // Tracking-failure detection (SPEC 3.9). The confidence of a frame is the product of
-//  * the share of rendered-gradient pixels that survive the consistency tests, mapped
-//    linearly from [min_share, good_share] to [0, 1];
+//  * the support: the better of the share of rendered-gradient pixels that survive the
+//    consistency tests, mapped linearly from [min_share, good_share] to [0, 1], and the
+//    absolute number of used pixels, from [min_used_px, good_used_px] to [0, 1] (a partly
+//    occluded object whose visible part still gives thousands of equations is supported);
 //  * the RMS normal-flow residual before the last update, from [good_residual_px,
-//    bad_residual_px] to [1, 0];
+//    bad_residual_px] to [1, 0], and its ratio to the residual of the recent confident
+//    frames (the noise and model-error floor of this camera and object), from
+//    [good_residual_ratio, bad_residual_ratio] to [1, 0]: a misaligned pose keeps fewer
+//    but worse-fitting pixels, an occluded but aligned one fits as well as before;
 //  * the size of the last update at the finest level (not converged = doubtful), from
 //    [good_update_px, bad_update_px] to [1, 0];
 // and 0 with fewer than min_pixels equations.
 struct FailureOptions {
   double min_share = 0.15;
   double good_share = 0.5;
+  double min_used_px = 500;     // used pixels (all cameras)
+  double good_used_px = 2500;
   double good_residual_px = 0.3;
   double bad_residual_px = 0.9;
+  double good_residual_ratio = 1.25;  // residual / reference residual
+  double bad_residual_ratio = 1.75;
+  // Weight of a new confident frame in the running reference residual (exponential mean),
+  // and its floor: below it the fit is at the level of interpolation error, where a
+  // doubling means nothing (noiseless renders), px.
+  double residual_reference_rate = 0.1;
+  double min_reference_residual_px = 0.2;
   double good_update_px = 0.3;
   double bad_update_px = 2.0;
   int min_pixels = 40;

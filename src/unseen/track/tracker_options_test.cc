@@ -30,7 +30,7 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
       "solver: {kernel: tukey, kernel_width: 4.685}\n"
       "pyramid: {max_levels: 2}\n"
       "predictor: {type: none, min_confidence: 0.4, confidence_power: 2}\n"
-      "failure: {lost_after_frames: 5}\n"
+      "failure: {lost_after_frames: 5, good_used_px: 3000, bad_residual_ratio: 2.0}\n"
       "frame_interval_s: 0.04\n");
   EXPECT_FALSE(o.preprocess.use_linf);
   EXPECT_DOUBLE_EQ(o.preprocess.blur_sigma_px, 2.5);
@@ -41,8 +41,10 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
   EXPECT_EQ(o.predictor.type, PredictorType::kHold);
   EXPECT_DOUBLE_EQ(o.predictor.min_confidence, 0.4);
   EXPECT_DOUBLE_EQ(o.predictor.confidence_power, 2.0);
-  EXPECT_DOUBLE_EQ(o.selection.block_min_share_ratio, 0.0);
   EXPECT_EQ(o.failure.lost_after_frames, 5);
+  EXPECT_DOUBLE_EQ(o.failure.good_used_px, 3000);
+  EXPECT_DOUBLE_EQ(o.failure.bad_residual_ratio, 2.0);
+  EXPECT_DOUBLE_EQ(o.selection.block_min_share_ratio, 0.0);
   EXPECT_DOUBLE_EQ(o.frame_interval_s, 0.04);
   EXPECT_DOUBLE_EQ(o.selection.max_normal_flow_px, 1.22);  // untouched default
 }
