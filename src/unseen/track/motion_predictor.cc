@@ -28,6 +28,10 @@ void MotionPredictorOptions::Check() const {
                              std::pair{"rotation_sigma", rotation_sigma}}) {
     UNSEEN_CHECK(value > 0.0 && std::isfinite(value), "predictor.{} {} must be > 0", name, value);
   }
+  UNSEEN_CHECK(min_confidence > 0.0 && min_confidence <= 1.0,
+               "predictor.min_confidence {} must be in (0, 1]", min_confidence);
+  UNSEEN_CHECK(confidence_power >= 0.0 && confidence_power <= 16.0,
+               "predictor.confidence_power {} must be in [0, 16]", confidence_power);
 }
 
 ConstantVelocityKalmanPredictor::ConstantVelocityKalmanPredictor(
@@ -68,15 +72,19 @@ Rigid3d ConstantVelocityKalmanPredictor::Predict(double dt) {
   return Pose();
 }
 
-void ConstantVelocityKalmanPredictor::Correct(const Rigid3d& world_from_obj) {
+void ConstantVelocityKalmanPredictor::Correct(const Rigid3d& world_from_obj, double confidence) {
   UNSEEN_CHECK(world_from_obj.IsValid(), "MotionPredictor::Correct: invalid pose {}",
                world_from_obj.ToString());
+  UNSEEN_CHECK(confidence >= 0.0 && confidence <= 1.0,
+               "MotionPredictor::Correct: confidence {} not in [0, 1]", confidence);
+  if (confidence < options_.min_confidence) return;
+  const double noise_gain = std::pow(confidence, -options_.confidence_power);  // R / c^p
   const Eigen::Vector3d rot = LogSO3(world_from_obj.rotation() * reference_.inverse());
   for (int i = 0; i < 6; ++i) {
     Axis& a = axes_[i];
     const double sigma = i < 3 ? options_.position_sigma : options_.rotation_sigma;
     const double z = i < 3 ? world_from_obj.translation()(i) : rot(i - 3);
-    const double s = a.pxx + sigma * sigma;
+    const double s = a.pxx + noise_gain * sigma * sigma;
     const double kx = a.pxx / s, kv = a.pxv / s;
     const double innovation = z - a.x;
     a.x += kx * innovation;
@@ -111,7 +119,7 @@ std::unique_ptr<MotionPredictor> MakeMotionPredictor(const MotionPredictorOption
     case PredictorType::kConstantVelocityKalman:
       return std::make_unique<ConstantVelocityKalmanPredictor>(options);
     case PredictorType::kHold:
-      return std::make_unique<HoldPredictor>();
+      return std::make_unique<HoldPredictor>(options.min_confidence);
   }
   ThrowError("unknown predictor type");
 }

@@ -64,6 +64,40 @@ TEST(MotionPredictor, ResetStopsTheObject) {
   EXPECT_LT(Difference(kf.Predict(0.1), PoseAt(0)).translation, 1e-12);
 }
 
+// The pose after `k` frames of steady motion and then one outlier 5 cm off along x fed
+// with `confidence`, as the next prediction sees it.
+Rigid3d PredictionAfterOutlier(MotionPredictor* p, double confidence) {
+  const double dt = 1.0 / 30;
+  p->Reset(PoseAt(0));
+  for (int k = 1; k <= 20; ++k) {
+    p->Predict(dt);
+    p->Correct(PoseAt(k * dt));
+  }
+  p->Predict(dt);
+  const Rigid3d truth = PoseAt(21 * dt);
+  p->Correct(Rigid3d(truth.rotation(), truth.translation() + Eigen::Vector3d(0.05, 0, 0)),
+             confidence);
+  return p->Predict(dt);
+}
+
+TEST(MotionPredictor, LessConfidentPosesMoveThePredictionLess) {
+  MotionPredictorOptions options;
+  options.min_confidence = 0.2;
+  options.confidence_power = 4.0;
+  ConstantVelocityKalmanPredictor kf(options);
+  const Rigid3d truth = PoseAt(22.0 / 30);
+  const double confident = Difference(PredictionAfterOutlier(&kf, 1.0), truth).translation;
+  const double doubtful = Difference(PredictionAfterOutlier(&kf, 0.3), truth).translation;
+  const double ignored = Difference(PredictionAfterOutlier(&kf, 0.1), truth).translation;
+  EXPECT_GT(confident, 0.03);  // a trusted pose is followed (and its jump taken as motion)
+  EXPECT_LT(doubtful, 0.5 * confident);
+  EXPECT_LT(ignored, 1e-3);    // below the floor the filter coasts on the steady motion
+  // The hold predictor keeps the last pose that reached the floor.
+  HoldPredictor hold(0.2);
+  EXPECT_LT(Difference(PredictionAfterOutlier(&hold, 0.1), PoseAt(20.0 / 30)).translation, 1e-12);
+  EXPECT_NEAR(Difference(PredictionAfterOutlier(&hold, 0.3), truth).translation, 0.05, 0.01);
+}
+
 TEST(MotionPredictor, RejectsBadInput) {
   MotionPredictorOptions o;
   o.position_sigma = 0;
@@ -71,6 +105,10 @@ TEST(MotionPredictor, RejectsBadInput) {
   EXPECT_THROW(ParsePredictorType("ukf"), Error);
   ConstantVelocityKalmanPredictor kf{MotionPredictorOptions()};
   EXPECT_THROW(kf.Predict(0.0), Error);
+  EXPECT_THROW(kf.Correct(PoseAt(0), 1.5), Error);
+  o = MotionPredictorOptions();
+  o.min_confidence = 0.0;
+  EXPECT_THROW(o.Check(), Error);
 }
 
 }  // namespace

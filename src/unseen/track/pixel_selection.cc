@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "unseen/track/flow_jacobian.h"
 #include "unseen/util/error.h"
@@ -45,6 +46,14 @@ void PixelSelectionOptions::Check() const {
                occlusion_max_magnitude_diff);
   UNSEEN_CHECK(min_eigen_ratio >= 1.0 && std::isfinite(min_eigen_ratio),
                "selection.min_eigen_ratio {} must be >= 1", min_eigen_ratio);
+  UNSEEN_CHECK(block_px >= 2 && block_px <= 256, "selection.block_px {} must be in [2, 256]",
+               block_px);
+  UNSEEN_CHECK(block_min_gradient >= 1, "selection.block_min_gradient {} must be >= 1",
+               block_min_gradient);
+  UNSEEN_CHECK(block_min_share_ratio >= 0.0 && block_min_share_ratio <= 1.0,
+               "selection.block_min_share_ratio {} must be in [0, 1]", block_min_share_ratio);
+  UNSEEN_CHECK(block_min_blocks >= 1, "selection.block_min_blocks {} must be >= 1",
+               block_min_blocks);
 }
 
 SelectionCounts& SelectionCounts::operator+=(const SelectionCounts& o) {
@@ -55,8 +64,11 @@ SelectionCounts& SelectionCounts::operator+=(const SelectionCounts& o) {
   rejected_magnitude += o.rejected_magnitude;
   rejected_undirected += o.rejected_undirected;
   rejected_normal_flow += o.rejected_normal_flow;
+  rejected_block += o.rejected_block;
   used += o.used;
   equations += o.equations;
+  block_share_sum += o.block_share_sum;
+  block_used += o.block_used;
   return *this;
 }
 
@@ -85,9 +97,19 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
                            float(in.origin_in_cam.z())};
   SelectionCounts c;
   float row[6];
+  // Per block: gradient pixels and used pixels.
+  const int block = options.block_px;
+  const int block_cols = (w + block - 1) / block, block_rows = (h + block - 1) / block;
+  std::vector<int> block_gradient(block_cols * block_rows, 0);
+  std::vector<int> block_used(block_cols * block_rows, 0);
+  std::vector<int> block_passed(block_cols * block_rows, 0);  // passed (4.13)-(4.15)
+  const int first_row = out->size();
+  std::vector<int> row_block;  // block of each row appended here
 
-  const int row_end = in.row_end < 0 ? h : std::min(in.row_end, h);
-  for (int y = std::max(in.row_begin, 0); y < row_end; ++y) {
+  for (int y = 0; y < h; ++y) {
+    int* row_gradient = block_gradient.data() + (y / block) * block_cols;
+    int* row_used = block_used.data() + (y / block) * block_cols;
+    int* row_passed = block_passed.data() + (y / block) * block_cols;
     const uint8_t* reg = in.region->ptr<uint8_t>(y);
     const float* dep = in.depth->ptr<float>(y);
     const float* vb = v.blurred.ptr<float>(y);
@@ -143,6 +165,7 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
         ++c.rejected_gradient;
         continue;
       }
+      ++row_gradient[x / block];
 
       // (4.13)-(4.15) occlusion rejection, per channel.
       if (occlusion) {
@@ -174,6 +197,7 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
           ++c.rejected_magnitude;
           continue;
         }
+        ++row_passed[x / block];
       }
 
       const float px = float(in.roi.x0 + x);
@@ -200,7 +224,9 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
           }
           FlowRowInCamera(fx, fy, cx, cy, origin, px, py, z, sgx, sgy, row);
           out->Add(row, -sit, 1.0f / std::sqrt(g2));
+          row_block.push_back((y / block) * block_cols + x / block);
           ++c.used;
+          ++row_used[x / block];
           ++c.equations;
           break;
         }
@@ -218,7 +244,9 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
           }
           FlowRowInCamera(fx, fy, cx, cy, origin, px, py, z, ggx, ggy, row);
           out->Add(row, -git, 1.0f / std::sqrt(g2));
+          row_block.push_back((y / block) * block_cols + x / block);
           ++c.used;
+          ++row_used[x / block];
           ++c.equations;
           break;
         }
@@ -233,6 +261,7 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
             }
             FlowRowInCamera(fx, fy, cx, cy, origin, px, py, z, gx[j], gy[j], row);
             out->Add(row, -it[j], 1.0f / std::sqrt(sq[j]));
+            row_block.push_back((y / block) * block_cols + x / block);
             ++added;
           }
           if (added == 0) {
@@ -240,10 +269,55 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
             continue;
           }
           ++c.used;
+          ++row_used[x / block];
           c.equations += added;
           break;
         }
       }
+    }
+  }
+  for (size_t b = 0; b < block_gradient.size(); ++b) {
+    if (block_gradient[b] < options.block_min_gradient) continue;
+    c.block_share_sum += double(block_used[b]) * block_used[b] / block_gradient[b];
+    c.block_used += block_used[b];
+  }
+  if (occlusion && options.block_min_share_ratio > 0.0) {
+    // Shares of the occlusion tests alone: a misalignment also fails the normal-flow bound
+    // (4.9), in whole blocks along the silhouette, which must stay to bring the pose back.
+    std::vector<float> shares;
+    for (size_t b = 0; b < block_gradient.size(); ++b) {
+      if (block_gradient[b] >= options.block_min_gradient) {
+        shares.push_back(float(block_passed[b]) / float(block_gradient[b]));
+      }
+    }
+    if (!shares.empty() && static_cast<int>(shares.size()) >= options.block_min_blocks) {
+      const size_t mid = shares.size() / 2;
+      std::nth_element(shares.begin(), shares.begin() + mid, shares.end());
+      const float min_share = float(options.block_min_share_ratio) * shares[mid];
+      std::vector<uint8_t> drop(block_gradient.size(), 0);
+      for (size_t b = 0; b < block_gradient.size(); ++b) {
+        drop[b] = block_gradient[b] >= options.block_min_gradient &&
+                  float(block_passed[b]) < min_share * float(block_gradient[b]);
+        if (drop[b]) {
+          c.rejected_block += block_used[b];
+          c.used -= block_used[b];
+        }
+      }
+      int kept = first_row;
+      for (size_t i = 0; i < row_block.size(); ++i) {
+        if (drop[row_block[i]]) continue;
+        const int from = first_row + static_cast<int>(i);
+        if (kept != from) {
+          out->rows[kept] = out->rows[from];
+          out->rhs[kept] = out->rhs[from];
+          out->inv_grad_norm[kept] = out->inv_grad_norm[from];
+        }
+        ++kept;
+      }
+      c.equations -= out->size() - kept;
+      out->rows.resize(kept);
+      out->rhs.resize(kept);
+      out->inv_grad_norm.resize(kept);
     }
   }
   *counts += c;

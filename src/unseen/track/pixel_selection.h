@@ -40,6 +40,22 @@ struct PixelSelectionOptions {
   double occlusion_max_angle_rad = 0.90;       // tau_theta of (4.14), per channel
   double occlusion_max_magnitude_diff = 39.2e-3;  // tau_md of (4.15), |grad| over channels
   double min_eigen_ratio = 10.0;  // lambda1 / lambda2 for a "directed" pixel (3.6)
+  // Blocks of block_px x block_px level pixels tally how many of their gradient pixels
+  // survive the tests (SelectionCounts::block_share_sum), which tells a coherent occluder
+  // (whole blocks rejected, the rest intact) from a misaligned pose (rejections spread over
+  // every block). Blocks with fewer than block_min_gradient gradient pixels are not counted.
+  int block_px = 8;
+  int block_min_gradient = 8;
+  // Block occlusion rejection (with use_occlusion_rejection): the pixels of a counted block
+  // where the share of gradient pixels passing the occlusion tests (4.13)-(4.15) is below
+  // block_min_share_ratio times the median share of the counted blocks are dropped too
+  // (those of an occluder that passed the per-pixel tests by chance); 0 disables it. A
+  // misaligned pose lowers the share of every block alike, so it drops few blocks; the
+  // normal-flow bound (4.9), which a misalignment fails in whole blocks along the
+  // silhouette, does not count. It needs at least block_min_blocks counted blocks: the
+  // median of a few blocks of a small or coarse image says little.
+  double block_min_share_ratio = 0.5;
+  int block_min_blocks = 32;
   void Check() const;
 };
 
@@ -52,10 +68,20 @@ struct SelectionCounts {
   long rejected_magnitude = 0;       // (4.15)
   long rejected_undirected = 0;      // 3.6, lambda1 / lambda2 below the ratio
   long rejected_normal_flow = 0;     // (4.9)
+  long rejected_block = 0;           // in a block that mostly failed the tests
   long used = 0;                     // pixels that gave at least one equation
   long equations = 0;
+  // Over the counted blocks b (PixelSelectionOptions::block_px): the sum of used_b^2 /
+  // gradient_b and the sum of used_b. Their ratio is the mean over the used pixels of the
+  // survival share of their own block (BlockShare()).
+  double block_share_sum = 0.0;
+  long block_used = 0;
   // Pixels with rendered gradient, the denominator of the survival share (3.9).
   long gradient_pixels() const { return candidates - rejected_gradient; }
+  // Mean survival share of the used pixels' blocks in [0, 1]: near the share of a clear
+  // view when the rejected pixels are gathered in whole blocks (an occluder), near the
+  // overall share when they are spread evenly (a misaligned pose); 0 without blocks.
+  double BlockShare() const { return block_used > 0 ? block_share_sum / block_used : 0.0; }
   SelectionCounts& operator+=(const SelectionCounts& o);
 };
 
@@ -68,7 +94,6 @@ struct SelectionInput {
   PixelRect roi;                    // level pixels: buffer (0, 0) is pixel (roi.x0, roi.y0)
   PinholeCamera camera;             // the level's camera
   Eigen::Vector3d origin_in_cam = Eigen::Vector3d::Zero();  // object origin, camera frame
-  int row_begin = 0, row_end = -1;  // buffer rows to select from; -1: to the last row
 };
 
 // Appends the equations of the selected pixels to `out` (rows in the camera frame, see

@@ -118,6 +118,67 @@ TEST(PixelSelection, OcclusionRejectionRemovesAnOccludersPixels) {
   EXPECT_GT(free_on.used, 0.85 * free_off.used);
 }
 
+// A smooth random colour texture of w x h pixels.
+cv::Mat Texture(int w, int h, int seed) {
+  cv::RNG rng(seed);
+  cv::Mat small(h / 8, w / 8, CV_32FC3);
+  rng.fill(small, cv::RNG::UNIFORM, 0.1, 0.9);
+  cv::Mat out;
+  cv::resize(small, out, cv::Size(w, h), 0, 0, cv::INTER_CUBIC);
+  return out;
+}
+
+cv::Mat Shifted(const cv::Mat& image, double dx) {
+  const cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, dx, 0, 1, 0);
+  cv::Mat out;
+  cv::warpAffine(image, out, shift, image.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  return out;
+}
+
+TEST(PixelSelection, BlocksTellACoherentOccluderFromAMisalignment) {
+  Scene clear;
+  clear.virtual_image = Texture(160, 96, 21);
+  clear.input_image = Shifted(clear.virtual_image, 0.3);
+  clear.depth = cv::Mat(96, 160, CV_32FC1, cv::Scalar(1.0f));
+  // The same with another texture in front of the left 40 % of the object.
+  Scene occluded = clear;
+  occluded.input_image = clear.input_image.clone();
+  const cv::Rect cover(0, 0, 64, 96);
+  Texture(160, 96, 22)(cover).copyTo(occluded.input_image(cover));
+  // And with the whole object misaligned by 2.5 px instead.
+  Scene misaligned = clear;
+  misaligned.input_image = Shifted(clear.virtual_image, 2.5);
+  cv::Mat region(96, 160, CV_8UC1, cv::Scalar(0));
+  region(cv::Rect(4, 4, 152, 88)).setTo(255);
+
+  PreprocessOptions pre;
+  PixelSelectionOptions plain;
+  plain.block_min_share_ratio = 0.0;
+  PixelSelectionOptions blocks;
+  blocks.block_min_share_ratio = 0.5;
+  const SelectionCounts c = Select(clear, plain, pre, region);
+  const SelectionCounts o = Select(occluded, plain, pre, region);
+  const SelectionCounts m = Select(misaligned, plain, pre, region);
+  auto share = [](const SelectionCounts& k) { return double(k.used) / k.gradient_pixels(); };
+  ASSERT_GT(c.used, 2000);
+  // Occluded: the share falls with the hidden part, the block share stays near a clear view's.
+  EXPECT_LT(share(o), 0.8 * share(c));
+  EXPECT_GT(o.BlockShare(), 0.9 * c.BlockShare());
+  // Misaligned: the rejections are spread, so the block share falls with the share.
+  EXPECT_LT(share(m), 0.8 * share(c));
+  EXPECT_LT(m.BlockShare(), 0.85 * c.BlockShare());
+
+  // Block rejection drops the occluder's chance survivors, little of a clear view (weak blocks).
+  cv::Mat covered_region = region.clone();
+  covered_region(cv::Rect(64, 0, 96, 96)).setTo(0);
+  const SelectionCounts survivors = Select(occluded, plain, pre, covered_region);
+  const SelectionCounts ob = Select(occluded, blocks, pre, region);
+  const SelectionCounts cb = Select(clear, blocks, pre, region);
+  EXPECT_GT(ob.rejected_block, survivors.used / 2);
+  EXPECT_EQ(ob.used + ob.rejected_block, o.used);
+  EXPECT_LT(cb.rejected_block, c.used / 12);
+}
+
 TEST(PixelSelection, NormalFlowBoundRejectsLargeMotion) {
   const cv::Vec3f dark(0.2f, 0.2f, 0.2f), bright(0.8f, 0.8f, 0.8f);
   Scene scene;
@@ -137,49 +198,16 @@ TEST(PixelSelection, NormalFlowBoundRejectsLargeMotion) {
   EXPECT_LT(bounded.used, unbounded.used);
 }
 
-TEST(PixelSelection, BandsOfRowsTogetherGiveTheWholeSelection) {
-  const cv::Vec3f dark(0.2f, 0.3f, 0.2f), bright(0.8f, 0.7f, 0.9f);
-  const cv::Mat virtual_image = EdgeImage(64, 48, 30.0, dark, bright);
-  const cv::Mat input_image = EdgeImage(64, 48, 30.4, dark, bright);
-  const cv::Mat depth(48, 64, CV_32FC1, cv::Scalar(1.0f));
-  cv::Mat region(48, 64, CV_8UC1, cv::Scalar(0));
-  region(cv::Rect(8, 8, 48, 32)).setTo(255);
-  PreprocessOptions pre;
-  PreprocessedImage v, i;
-  Preprocess(virtual_image, pre, 0, true, &v);
-  Preprocess(input_image, pre, 0, true, &i);
-  SelectionInput in;
-  in.virtual_image = &v;
-  in.input_image = &i;
-  in.region = &region;
-  in.depth = &depth;
-  in.roi = {0, 0, 64, 48};
-  in.camera = Camera(64, 48);
-  in.origin_in_cam = Eigen::Vector3d(0, 0, 1.0);
-  FlowEquations whole;
-  SelectionCounts whole_counts;
-  SelectPixels(in, PixelSelectionOptions(), &whole, &whole_counts);
-  ASSERT_GT(whole.size(), 32);
-  FlowEquations bands;
-  SelectionCounts band_counts;
-  for (const auto& [begin, end] : {std::pair{0, 17}, std::pair{17, 30}, std::pair{30, -1}}) {
-    in.row_begin = begin;
-    in.row_end = end;
-    SelectPixels(in, PixelSelectionOptions(), &bands, &band_counts);
-  }
-  EXPECT_EQ(band_counts.candidates, whole_counts.candidates);
-  EXPECT_EQ(band_counts.used, whole_counts.used);
-  ASSERT_EQ(bands.size(), whole.size());
-  for (int k = 0; k < whole.size(); ++k) {
-    EXPECT_EQ(bands.rows[k], whole.rows[k]);
-    EXPECT_EQ(bands.rhs[k], whole.rhs[k]);
-  }
-}
-
 TEST(PixelSelection, OptionsAndNames) {
   PixelSelectionOptions o;
   EXPECT_NO_THROW(o.Check());
   o.max_normal_flow_px = 0;
+  EXPECT_THROW(o.Check(), Error);
+  o = PixelSelectionOptions();
+  o.block_min_share_ratio = 1.5;
+  EXPECT_THROW(o.Check(), Error);
+  o = PixelSelectionOptions();
+  o.block_px = 1;
   EXPECT_THROW(o.Check(), Error);
   EXPECT_EQ(ParseColorMode("grey"), ColorMode::kGrey);
   EXPECT_EQ(ParseColorMode(ToString(ColorMode::kRawColor)), ColorMode::kRawColor);

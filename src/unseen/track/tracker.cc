@@ -49,12 +49,14 @@ std::string SolveSummary::BriefReport() const {
     iters += fmt::format("{}{}", iters.empty() ? "" : "/", iterations_per_level[l]);
   }
   return fmt::format(
-      "levels {} iters {} renders {} | px cand {} grad- {} occ- {}/{}/{} undir- {} flow- {} used {} "
-      "(share {:.2f}) | res {:.3f}->{:.3f} px, last upd {:.3f} px, corr {:.1f} px{} | ms "
-      "pred {:.3f} rend {:.3f} pre {:.3f} sel {:.3f} solve {:.3f} total {:.3f}",
+      "levels {} iters {} renders {} | px cand {} grad- {} occ- {}/{}/{} undir- {} flow- {} "
+      "block- {} used {} (share {:.2f} block {:.2f}) | res {:.3f}->{:.3f} px, last upd {:.3f} "
+      "px, corr {:.1f} px{} | ms pred {:.3f} rend {:.3f} pre {:.3f} sel {:.3f} solve {:.3f} "
+      "total {:.3f}",
       num_levels, iters, renders, counts.candidates, counts.rejected_gradient,
       counts.rejected_input_gradient, counts.rejected_direction, counts.rejected_magnitude,
-      counts.rejected_undirected, counts.rejected_normal_flow, counts.used, share,
+      counts.rejected_undirected, counts.rejected_normal_flow, counts.rejected_block, counts.used,
+      share, counts.BlockShare(),
       initial_residual_px, final_residual_px, last_update_px, correction_px,
       search_candidates ? fmt::format(", searched {}", search_candidates) : std::string(),
       times.predict_ms, times.render_ms, times.preprocess_ms, times.select_ms, times.solve_ms,
@@ -171,6 +173,7 @@ void Tracker::Initialize(const Rigid3d& world_from_obj) {
   status_ = TrackStatus::kTracking;
   bad_frames_ = 0;
   recent_correction_px_ = std::numeric_limits<double>::infinity();
+  residual_reference_px_ = 0.0;
   initialized_ = true;
 }
 
@@ -235,10 +238,16 @@ std::vector<cv::Mat> Tracker::CheckImages(const std::vector<cv::Mat>& images) co
 double Tracker::Confidence(const SolveSummary& s) const {
   const FailureOptions& f = options_.failure;
   if (s.equations < f.min_pixels || s.counts.gradient_pixels() <= 0) return 0.0;
-  const double share_term = Ramp(s.share, f.min_share, f.good_share);
-  const double residual_term = Ramp(s.initial_residual_px, f.bad_residual_px, f.good_residual_px);
+  const double support_term = std::max(Ramp(s.share, f.min_share, f.good_share),
+                                       Ramp(double(s.counts.used), f.min_used_px, f.good_used_px));
+  double residual_term = Ramp(s.initial_residual_px, f.bad_residual_px, f.good_residual_px);
+  if (residual_reference_px_ > 0.0) {
+    const double reference = std::max(residual_reference_px_, f.min_reference_residual_px);
+    residual_term *= Ramp(s.initial_residual_px / reference, f.bad_residual_ratio,
+                          f.good_residual_ratio);
+  }
   const double update_term = Ramp(s.last_update_px, f.bad_update_px, f.good_update_px);
-  return share_term * residual_term * update_term;
+  return support_term * residual_term * update_term;
 }
 
 TrackResult Tracker::Align(const std::vector<cv::Mat>& images, const Rigid3d& world_from_obj,
@@ -482,11 +491,8 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
   const int margin =
       static_cast<int>(std::ceil(3.0 * options_.preprocess.blur_sigma_px)) + po.rim_px + 2;
   const bool input_gradients = options_.selection.use_occlusion_rejection;
-  const int threads = pool_ ? pool_->size() : 1;
-  // Pixel selection runs in bands of rows: one per camera, or one per thread for one camera.
-  const int bands = ncam > 1 ? 1 : threads;
-  std::vector<FlowEquations> equations(ncam * bands);
-  std::vector<SelectionCounts> band_counts(ncam * bands);
+  std::vector<FlowEquations> equations(ncam);
+  std::vector<SelectionCounts> camera_counts(ncam);
   std::vector<int> jobs;  // c: camera c's virtual image; ncam + c: its input
   for (auto& w : work_) {
     w->times = StageTimes();
@@ -568,13 +574,11 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
           w.input_preprocess_ms += input_timer.ElapsedMilliseconds();
         }
       });
-      // Pixel selection (4.8)-(4.15), (3.6) in bands of rows.
-      std::vector<double> band_ms(ncam * bands, 0.0);
-      RunParallel(ncam * bands, [&](int j) {
-        const int c = j / bands, band = j % bands;
+      // Pixel selection (4.8)-(4.15), (3.6), per camera.
+      RunParallel(ncam, [&](int c) {
         CameraWork& w = *work_[c];
-        equations[j].Clear();
-        band_counts[j] = SelectionCounts();
+        equations[c].Clear();
+        camera_counts[c] = SelectionCounts();
         if (!w.active || !w.virtual_ok) return;
         Timer select_timer;
         SelectionInput in;
@@ -585,15 +589,12 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
         in.roi = w.roi;
         in.camera = w.camera;
         in.origin_in_cam = (cam_from_world_[c] * round_pose).translation();
-        in.row_begin = w.roi.height() * band / bands;
-        in.row_end = w.roi.height() * (band + 1) / bands;
-        equations[j].world_from_cam_rotation = rig_.cameras[c].world_from_cam.RotationMatrix();
-        SelectPixels(in, options_.selection, &equations[j], &band_counts[j]);
-        band_ms[j] = select_timer.ElapsedMilliseconds();
+        equations[c].world_from_cam_rotation = rig_.cameras[c].world_from_cam.RotationMatrix();
+        SelectPixels(in, options_.selection, &equations[c], &camera_counts[c]);
+        w.times.select_ms += select_timer.ElapsedMilliseconds();
       });
-      for (int j = 0; j < ncam * bands; ++j) work_[j / bands]->times.select_ms += band_ms[j];
       counts = SelectionCounts();
-      for (const SelectionCounts& b : band_counts) counts += b;
+      for (const SelectionCounts& b : camera_counts) counts += b;
 
       timer.Restart();
       const FlowSolution solution = SolveFlow(equations, options_.solver);
@@ -643,7 +644,7 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
 TrackResult Tracker::AlignPredicted(const std::vector<cv::Mat>& images,
                                     const Rigid3d& predicted) {
   const PyramidOptions& po = options_.pyramid;
-  const double trust = options_.failure.trust_confidence;
+  const double trust = options_.reacquisition.doubtful_confidence;
   const int full = NumLevelsFor(predicted);
   int levels = full;
   if (po.adaptive_levels && status_ == TrackStatus::kTracking) {
@@ -711,7 +712,7 @@ TrackResult Tracker::Track(const std::vector<cv::Mat>& images_per_camera) {
       status_ = TrackStatus::kLost;
       predictor_->Reset(last_good_);
     } else if (r.confidence >= f.lost_confidence) {
-      if (r.confidence >= f.trust_confidence) predictor_->Correct(r.world_from_obj);
+      predictor_->Correct(r.world_from_obj, r.confidence);  // weighed by the confidence
       last_good_ = r.world_from_obj;
     }
   } else if (r.confidence >= f.recover_confidence) {
@@ -719,6 +720,17 @@ TrackResult Tracker::Track(const std::vector<cv::Mat>& images_per_camera) {
     bad_frames_ = 0;
     predictor_->Reset(r.world_from_obj);
     last_good_ = r.world_from_obj;
+  }
+  // The reference residual follows the confident frames that fit about as well as it, so
+  // that a drift into a worse fit does not raise it; it is kept while lost, to judge the
+  // re-acquired pose by the same floor.
+  const double residual = r.summary.initial_residual_px;
+  if (status_ == TrackStatus::kTracking && r.confidence >= f.recover_confidence) {
+    if (residual_reference_px_ <= 0.0) {
+      residual_reference_px_ = residual;
+    } else if (residual < f.good_residual_ratio * residual_reference_px_) {
+      residual_reference_px_ += f.residual_reference_rate * (residual - residual_reference_px_);
+    }
   }
   r.status = status_;
   if (status_ == TrackStatus::kLost) r.world_from_obj = last_good_;

@@ -159,6 +159,8 @@ class Tracker {
   // Decaying maximum of the recent corrections, level-0 pixels (infinite: unknown).
   double recent_correction_px_ = std::numeric_limits<double>::infinity();
   std::unique_ptr<Reacquisition> reacquisition_;
+  // Running mean of the residual of the confident frames (FailureOptions); 0 = none yet.
+  double residual_reference_px_ = 0.0;
 };
 
 }  // namespace unseen

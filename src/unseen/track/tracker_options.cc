@@ -44,6 +44,16 @@ void PyramidOptions::Check() const {
 void FailureOptions::Check() const {
   UNSEEN_CHECK(min_share >= 0.0 && good_share > min_share && good_share <= 1.0,
                "failure: need 0 <= min_share ({}) < good_share ({}) <= 1", min_share, good_share);
+  UNSEEN_CHECK(min_used_px >= 0.0 && good_used_px > min_used_px,
+               "failure: need 0 <= min_used_px ({}) < good_used_px ({})", min_used_px,
+               good_used_px);
+  UNSEEN_CHECK(good_residual_ratio >= 1.0 && bad_residual_ratio > good_residual_ratio,
+               "failure: need 1 <= good_residual_ratio ({}) < bad_residual_ratio ({})",
+               good_residual_ratio, bad_residual_ratio);
+  UNSEEN_CHECK(residual_reference_rate > 0.0 && residual_reference_rate <= 1.0,
+               "failure.residual_reference_rate {} must be in (0, 1]", residual_reference_rate);
+  UNSEEN_CHECK(min_reference_residual_px > 0.0 && std::isfinite(min_reference_residual_px),
+               "failure.min_reference_residual_px {} must be > 0", min_reference_residual_px);
   UNSEEN_CHECK(good_residual_px >= 0.0 && bad_residual_px > good_residual_px,
                "failure: need 0 <= good_residual_px ({}) < bad_residual_px ({})",
                good_residual_px, bad_residual_px);
@@ -53,8 +63,6 @@ void FailureOptions::Check() const {
   UNSEEN_CHECK(min_pixels >= 6, "failure.min_pixels {} must be >= 6", min_pixels);
   UNSEEN_CHECK(lost_confidence >= 0.0 && lost_confidence <= 1.0,
                "failure.lost_confidence {} must be in [0, 1]", lost_confidence);
-  UNSEEN_CHECK(trust_confidence >= 0.0 && trust_confidence <= 1.0,
-               "failure.trust_confidence {} must be in [0, 1]", trust_confidence);
   UNSEEN_CHECK(recover_confidence >= lost_confidence && recover_confidence <= 1.0,
                "failure.recover_confidence {} must be in [lost_confidence = {}, 1]",
                recover_confidence, lost_confidence);
@@ -174,7 +182,11 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"occlusion_min_gradient_sq", Field(&se.occlusion_min_gradient_sq)},
         {"occlusion_max_angle_rad", Field(&se.occlusion_max_angle_rad)},
         {"occlusion_max_magnitude_diff", Field(&se.occlusion_max_magnitude_diff)},
-        {"min_eigen_ratio", Field(&se.min_eigen_ratio)}}},
+        {"min_eigen_ratio", Field(&se.min_eigen_ratio)},
+        {"block_px", Field(&se.block_px)},
+        {"block_min_gradient", Field(&se.block_min_gradient)},
+        {"block_min_share_ratio", Field(&se.block_min_share_ratio)},
+        {"block_min_blocks", Field(&se.block_min_blocks)}}},
       {"solver",
        {{"kernel", EnumField(&so.kernel, &ParseRobustKernel)},
         {"kernel_width", Field(&so.kernel_width)},
@@ -202,18 +214,25 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"linear_accel_sigma", Field(&pr.linear_accel_sigma)},
         {"angular_accel_sigma", Field(&pr.angular_accel_sigma)},
         {"position_sigma", Field(&pr.position_sigma)},
-        {"rotation_sigma", Field(&pr.rotation_sigma)}}},
+        {"rotation_sigma", Field(&pr.rotation_sigma)},
+        {"min_confidence", Field(&pr.min_confidence)},
+        {"confidence_power", Field(&pr.confidence_power)}}},
       {"failure",
        {{"min_share", Field(&fa.min_share)},
         {"good_share", Field(&fa.good_share)},
+        {"min_used_px", Field(&fa.min_used_px)},
+        {"good_used_px", Field(&fa.good_used_px)},
         {"good_residual_px", Field(&fa.good_residual_px)},
+        {"good_residual_ratio", Field(&fa.good_residual_ratio)},
+        {"bad_residual_ratio", Field(&fa.bad_residual_ratio)},
+        {"residual_reference_rate", Field(&fa.residual_reference_rate)},
+        {"min_reference_residual_px", Field(&fa.min_reference_residual_px)},
         {"bad_residual_px", Field(&fa.bad_residual_px)},
         {"good_update_px", Field(&fa.good_update_px)},
         {"bad_update_px", Field(&fa.bad_update_px)},
         {"min_pixels", Field(&fa.min_pixels)},
         {"lost_confidence", Field(&fa.lost_confidence)},
         {"lost_after_frames", Field(&fa.lost_after_frames)},
-        {"trust_confidence", Field(&fa.trust_confidence)},
         {"recover_confidence", Field(&fa.recover_confidence)},
         {"search_when_lost", Field(&fa.search_when_lost)},
         {"search_offset", Field(&fa.search_offset)}}},

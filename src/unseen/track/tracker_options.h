@@ -5,12 +5,13 @@
 //
 //   preprocess: {use_linf: true, linf_sigma_px: 8, linf_epsilon: 0.05, blur_sigma_px: 1.8}
 //   selection:  {color_mode: redundancy, min_gradient_sq: 984e-6, max_normal_flow_px: 1.22,
-//                use_occlusion_rejection: true, ...}
+//                use_occlusion_rejection: true, block_min_share_ratio: 0.5, ...}
 //   solver:     {kernel: huber, kernel_width: 1.345, irls_iterations: 2}
 //   pyramid:    {max_levels: 4, min_object_px: 32, max_iterations_per_level: 6,
 //                adaptive_levels: true}
-//   predictor:  {type: kalman, linear_accel_sigma: 2.0}
-//   failure:    {lost_confidence: 0.3, lost_after_frames: 3, recover_confidence: 0.5}
+//   predictor:  {type: kalman, linear_accel_sigma: 2.0, min_confidence: 0.5}
+//   failure:    {lost_confidence: 0.25, lost_after_frames: 2, recover_confidence: 0.5,
+//                good_used_px: 2500, bad_residual_ratio: 1.75, ...}
 //   reacquisition: {search_radii: 4, rotation_deg: 25, max_candidates: 12, ...}
 //   frame_interval_s: 0.0333
 //   threads: 1
@@ -49,8 +50,9 @@ struct PyramidOptions {
   // finest level captures about capture_px pixels and each coarser one doubles that; the
   // expected error is prediction_margin times the largest recent correction (a maximum
   // that decays by correction_decay per frame). A doubtful result (confidence below
-  // FailureOptions::trust_confidence, or a correction near the reach of the levels used) is
-  // redone with the full pyramid. false: always the full pyramid (the thesis).
+  // ReacquisitionOptions::doubtful_confidence, or a correction near the reach of the
+  // levels used) is redone with the full pyramid. false: always the full pyramid (the
+  // thesis).
   bool adaptive_levels = true;
   int min_adaptive_levels = 2;  // but never fewer levels than this (coarse levels smooth the cost)
   double capture_px = 2.0;
@@ -60,26 +62,36 @@ struct PyramidOptions {
 };
 
 // Tracking-failure detection (SPEC 3.9). The confidence of a frame is the product of
-//  * the share of rendered-gradient pixels that survive the consistency tests, mapped
-//    linearly from [min_share, good_share] to [0, 1];
+//  * the support: the better of the share of rendered-gradient pixels that survive the
+//    consistency tests, mapped linearly from [min_share, good_share] to [0, 1], and the
+//    absolute number of used pixels, from [min_used_px, good_used_px] to [0, 1] (a partly
+//    occluded object whose visible part still gives thousands of equations is supported);
 //  * the RMS normal-flow residual before the last update, from [good_residual_px,
-//    bad_residual_px] to [1, 0];
+//    bad_residual_px] to [1, 0], and its ratio to the residual of the recent confident
+//    frames (the noise and model-error floor of this camera and object), from
+//    [good_residual_ratio, bad_residual_ratio] to [1, 0]: a misaligned pose keeps fewer
+//    but worse-fitting pixels, an occluded but aligned one fits as well as before;
 //  * the size of the last update at the finest level (not converged = doubtful), from
 //    [good_update_px, bad_update_px] to [1, 0];
 // and 0 with fewer than min_pixels equations.
 struct FailureOptions {
   double min_share = 0.15;
   double good_share = 0.5;
+  double min_used_px = 500;     // used pixels (all cameras)
+  double good_used_px = 2500;
   double good_residual_px = 0.3;
   double bad_residual_px = 0.9;
+  double good_residual_ratio = 1.25;  // residual / reference residual
+  double bad_residual_ratio = 1.75;
+  // Weight of a new confident frame in the running reference residual (exponential mean),
+  // and its floor: below it the fit is at the level of interpolation error, where a
+  // doubling means nothing (noiseless renders), px.
+  double residual_reference_rate = 0.1;
+  double min_reference_residual_px = 0.2;
   double good_update_px = 0.3;
   double bad_update_px = 2.0;
   int min_pixels = 40;
   double lost_confidence = 0.25;   // a frame below this is bad
-  // Only poses at least this confident update the motion predictor; below it the
-  // predictor coasts, so that a doubtful solve (an occluder, a drifting depth) does not
-  // teach it a velocity that carries the next frames further away.
-  double trust_confidence = 0.5;
   int lost_after_frames = 2;       // this many bad frames in a row: lost (hysteresis)
   double recover_confidence = 0.5; // while lost, a frame above this re-acquires
   // While lost, search for the object (ReacquisitionOptions): correlation seeds and poses
@@ -142,8 +154,8 @@ struct TrackerOptions {
   double frame_interval_s = 1.0 / 30.0;  // time between frames for the predictor, s
   // Threads for one frame (a ThreadPool): cameras are rendered, pre-processed and
   // selected in parallel; with one camera the input's pre-processing runs beside the first
-  // render of a level, selection in bands of rows and the render's shading pass in bands
-  // too. 0: all hardware threads. One by default, the figure the thesis measured.
+  // render of a level and the render's shading pass runs in bands of rows. 0: all
+  // hardware threads. One by default, the figure the thesis measured.
   int threads = 1;
   void Check() const;
 };

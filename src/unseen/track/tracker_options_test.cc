@@ -26,11 +26,11 @@ TEST(TrackerOptions, DefaultsAreTheThesisValues) {
 TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
   const TrackerOptions o = ParseTrackerOptions(
       "preprocess: {use_linf: false, blur_sigma_px: 2.5}\n"
-      "selection: {color_mode: raw, use_occlusion_rejection: false}\n"
+      "selection: {color_mode: raw, use_occlusion_rejection: false, block_min_share_ratio: 0}\n"
       "solver: {kernel: tukey, kernel_width: 4.685}\n"
       "pyramid: {max_levels: 2, adaptive_levels: false, min_adaptive_levels: 1, capture_px: 3}\n"
-      "predictor: {type: none}\n"
-      "failure: {lost_after_frames: 5}\n"
+      "predictor: {type: none, min_confidence: 0.4, confidence_power: 2}\n"
+      "failure: {lost_after_frames: 5, good_used_px: 3000, bad_residual_ratio: 2.0}\n"
       "frame_interval_s: 0.04\n"
       "threads: 2\n");
   EXPECT_FALSE(o.preprocess.use_linf);
@@ -44,7 +44,12 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
   EXPECT_EQ(o.pyramid.min_adaptive_levels, 1);
   EXPECT_EQ(o.pyramid.capture_px, 3.0);
   EXPECT_EQ(o.predictor.type, PredictorType::kHold);
+  EXPECT_DOUBLE_EQ(o.predictor.min_confidence, 0.4);
+  EXPECT_DOUBLE_EQ(o.predictor.confidence_power, 2.0);
   EXPECT_EQ(o.failure.lost_after_frames, 5);
+  EXPECT_DOUBLE_EQ(o.failure.good_used_px, 3000);
+  EXPECT_DOUBLE_EQ(o.failure.bad_residual_ratio, 2.0);
+  EXPECT_DOUBLE_EQ(o.selection.block_min_share_ratio, 0.0);
   EXPECT_DOUBLE_EQ(o.frame_interval_s, 0.04);
   EXPECT_DOUBLE_EQ(o.selection.max_normal_flow_px, 1.22);  // untouched default
 }

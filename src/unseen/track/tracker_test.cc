@@ -191,6 +191,68 @@ TEST_F(TrackerScene, OcclusionRejectionKeepsTheTrackUnderAnOccluder) {
       << b.BriefReport();
 }
 
+// `image` with the columns [x0, x1) of the cube's projection at `pose` replaced by `cover`
+// (a textured occluder in front of it); `covered` gets the share of the cube's pixels hidden.
+cv::Mat Occlude(const Mesh& cube, const RigCamera& camera, const Rigid3d& pose,
+                const cv::Mat& image, const cv::Mat& cover, double width_share,
+                double* covered) {
+  RenderBuffers buffers;
+  const PinholeCamera& cam = camera.intrinsics;
+  Render(cube, cam, camera.cam_from_world() * pose, cam.ImageRect(), RenderOptions(), &buffers);
+  const cv::Rect box = cv::boundingRect(buffers.mask);
+  const cv::Rect hidden(box.x, 0, int(width_share * box.width), image.rows);
+  cv::Mat out = image.clone();
+  cover(hidden).copyTo(out(hidden));
+  *covered = double(cv::countNonZero(buffers.mask(hidden))) / cv::countNonZero(buffers.mask);
+  return out;
+}
+
+TEST_F(TrackerScene, PartlyOccludedObjectStaysTrackedAndConfident) {
+  // The cube moves 2 mm a frame to the right; after four clear frames a static occluder
+  // textured like it (a second lettered cube, close to the camera) hides the left part of
+  // it, about 40 % of its pixels.
+  const cv::Mat background = Background(rig_.cameras[0].intrinsics, 1);
+  const Rigid3d occluder_pose(ExpSO3(Eigen::Vector3d(-0.3, 0.5, 0.4)),
+                              Eigen::Vector3d(-0.01, 0.0, 0.45));
+  const cv::Mat cover = Synthesize(cube_, rig_.cameras[0], occluder_pose, background);
+  Tracker tracker(rig_, cube_);
+  tracker.Initialize(truth_);
+  for (int k = 1; k <= 16; ++k) {
+    const Rigid3d pose(truth_.rotation(), truth_.translation() + Eigen::Vector3d(0.002 * k, 0, 0));
+    cv::Mat image = Synthesize(cube_, rig_.cameras[0], pose, background);
+    if (k > 4) {
+      double covered = 0.0;
+      image = Occlude(cube_, rig_.cameras[0], pose, image, cover, 0.45, &covered);
+      ASSERT_GT(covered, 0.3);
+      ASSERT_LT(covered, 0.5);
+    }
+    const TrackResult r = tracker.Track({image});
+    EXPECT_EQ(r.status, TrackStatus::kTracking) << "frame " << k << ": " << r.BriefReport();
+    EXPECT_GT(r.confidence, 0.5) << "frame " << k << ": " << r.BriefReport();
+    EXPECT_LT(Difference(r.world_from_obj, pose).translation, 0.003)
+        << "frame " << k << ": " << r.BriefReport();
+    EXPECT_LT(Difference(r.world_from_obj, pose).rotation_rad, 1.0 * kDeg)
+        << "frame " << k << ": " << r.BriefReport();
+  }
+}
+
+TEST_F(TrackerScene, PoseFarOutsideTheCaptureRangeGetsLowConfidence) {
+  Tracker tracker(rig_, cube_);
+  // Offsets far beyond what the pyramid brings back: the solve ends somewhere wrong.
+  Vector6d offsets[3];
+  offsets[0] << 0.06, 0.0, 0.0, 0.0, 0.0, 0.0;
+  offsets[1] << 0.0, 0.03, 0.0, 0.0, 0.0, 35 * kDeg;
+  offsets[2] << 0.0, 0.0, 0.0, 40 * kDeg, -30 * kDeg, 0.0;
+  for (const Vector6d& d : offsets) {
+    const TrackResult r = tracker.Align({image_}, Perturb(truth_, d));
+    const PoseDifference e = Difference(r.world_from_obj, truth_);
+    if (e.translation < 0.005 && e.rotation_rad < 2 * kDeg) continue;  // brought back after all
+    EXPECT_LT(r.confidence, tracker.options().failure.lost_confidence)
+        << "error " << e.translation * 1e3 << " mm " << e.rotation_rad / kDeg
+        << " deg: " << r.BriefReport();
+  }
+}
+
 TEST(TrackerMultiCamera, TwoCamerasBeatOneOnDepth) {
   // Two cameras 0.6 m apart verging on the object; noisy images.
   Rig rig;
@@ -260,7 +322,7 @@ TEST_F(TrackerScene, SameResultOnOneAndTwoThreads) {
   const TrackResult one = Tracker(rig_, cube_, options).Align({image_}, start);
   options.threads = 2;
   const TrackResult two = Tracker(rig_, cube_, options).Align({image_}, start);
-  // Only the order of float sums differs (pixel selection runs in bands of rows).
+  // The same work, split over threads.
   EXPECT_LT(Difference(one.world_from_obj, two.world_from_obj).translation, 2e-5);
   EXPECT_LT(Difference(one.world_from_obj, two.world_from_obj).rotation_rad, 0.005 * kDeg);
   EXPECT_EQ(one.summary.counts.used, two.summary.counts.used);
