@@ -145,7 +145,7 @@ void Rig::Check() const {
 }
 
 std::optional<PixelRect> PinholeCamera::PointsRect(
-    const std::vector<Eigen::Vector3d>& points_in_cam) const {
+    std::span<const Eigen::Vector3d> points_in_cam) const {
   if (points_in_cam.empty()) return std::nullopt;
   double xl = std::numeric_limits<double>::infinity(), yl = xl;
   double xh = -std::numeric_limits<double>::infinity(), yh = xh;

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -71,7 +72,7 @@ struct PinholeCamera {
   // around an object: then it bounds the object's projection), clipped to the image, with
   // SphereRect's pixel convention. std::nullopt for no points, a point not in front of the
   // camera (z < 1 mm; the rectangle would be unbounded) or a rectangle outside the image.
-  std::optional<PixelRect> PointsRect(const std::vector<Eigen::Vector3d>& points_in_cam) const;
+  std::optional<PixelRect> PointsRect(std::span<const Eigen::Vector3d> points_in_cam) const;
 };
 
 // One camera of a synchronized rig.

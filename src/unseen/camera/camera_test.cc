@@ -100,7 +100,8 @@ TEST(PinholeCamera, PointsRectBoundsTheProjectionsTightly) {
   EXPECT_FALSE(cam.PointsRect(corners).has_value());
   EXPECT_FALSE(cam.PointsRect({}).has_value());
   // Entirely off to the side of the image.
-  EXPECT_FALSE(cam.PointsRect({Eigen::Vector3d(5, 0, 1), Eigen::Vector3d(6, 0.1, 1)}).has_value());
+  const std::vector<Eigen::Vector3d> aside = {Eigen::Vector3d(5, 0, 1), Eigen::Vector3d(6, 0.1, 1)};
+  EXPECT_FALSE(cam.PointsRect(aside).has_value());
 }
 
 TEST(PinholeCamera, CheckRejectsBadIntrinsics) {

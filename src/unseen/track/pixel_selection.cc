@@ -110,6 +110,16 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
     int* row_gradient = block_gradient.data() + (y / block) * block_cols;
     int* row_used = block_used.data() + (y / block) * block_cols;
     int* row_passed = block_passed.data() + (y / block) * block_cols;
+    // Appends `row` as the equation row . twist = b of pixel (x, y), noting its block.
+    auto add_equation = [&](int x, float b, float inv_grad_norm) {
+      out->Add(row, b, inv_grad_norm);
+      row_block.push_back((y / block) * block_cols + x / block);
+      ++c.equations;
+    };
+    auto count_used = [&](int x) {
+      ++c.used;
+      ++row_used[x / block];
+    };
     const uint8_t* reg = in.region->ptr<uint8_t>(y);
     const float* dep = in.depth->ptr<float>(y);
     const float* vb = v.blurred.ptr<float>(y);
@@ -223,11 +233,8 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
             continue;
           }
           FlowRowInCamera(fx, fy, cx, cy, origin, px, py, z, sgx, sgy, row);
-          out->Add(row, -sit, 1.0f / std::sqrt(g2));
-          row_block.push_back((y / block) * block_cols + x / block);
-          ++c.used;
-          ++row_used[x / block];
-          ++c.equations;
+          add_equation(x, -sit, 1.0f / std::sqrt(g2));
+          count_used(x);
           break;
         }
         case ColorMode::kGrey: {
@@ -243,11 +250,8 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
             continue;
           }
           FlowRowInCamera(fx, fy, cx, cy, origin, px, py, z, ggx, ggy, row);
-          out->Add(row, -git, 1.0f / std::sqrt(g2));
-          row_block.push_back((y / block) * block_cols + x / block);
-          ++c.used;
-          ++row_used[x / block];
-          ++c.equations;
+          add_equation(x, -git, 1.0f / std::sqrt(g2));
+          count_used(x);
           break;
         }
         case ColorMode::kRawColor: {
@@ -260,17 +264,14 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
               continue;
             }
             FlowRowInCamera(fx, fy, cx, cy, origin, px, py, z, gx[j], gy[j], row);
-            out->Add(row, -it[j], 1.0f / std::sqrt(sq[j]));
-            row_block.push_back((y / block) * block_cols + x / block);
+            add_equation(x, -it[j], 1.0f / std::sqrt(sq[j]));
             ++added;
           }
           if (added == 0) {
             if (flow_rejected) ++c.rejected_normal_flow;
             continue;
           }
-          ++c.used;
-          ++row_used[x / block];
-          c.equations += added;
+          count_used(x);
           break;
         }
       }

@@ -56,18 +56,31 @@ cv::Mat EdgeImage(int w, int h, double edge_x, const cv::Vec3f& left, const cv::
   return image;
 }
 
+// A 64x48 scene at 1 m depth whose virtual and input images show the same vertical edge
+// between `left` and `right` at columns `virtual_x` and `input_x`.
+Scene EdgeScene(double virtual_x, double input_x, const cv::Vec3f& left, const cv::Vec3f& right) {
+  Scene scene;
+  scene.virtual_image = EdgeImage(64, 48, virtual_x, left, right);
+  scene.input_image = EdgeImage(64, 48, input_x, left, right);
+  scene.depth = cv::Mat(48, 64, CV_32FC1, cv::Scalar(1.0f));
+  return scene;
+}
+
+// The region used in EdgeScene: all but an 8-pixel border.
+cv::Mat EdgeSceneRegion() {
+  cv::Mat region(48, 64, CV_8UC1, cv::Scalar(0));
+  region(cv::Rect(8, 8, 48, 32)).setTo(255);
+  return region;
+}
+
 TEST(PixelSelection, ColourGradientRedundancyKeepsIsoluminantEdgesThatGreyLoses) {
   // Two colours of equal luminance (BT.601 weights in BGR order).
   const cv::Vec3f a(0.2f, 0.5f, 0.5f);
   const float lum_a = 0.114f * a[0] + 0.587f * a[1] + 0.299f * a[2];
   const float b_blue = 0.7f, b_green = 0.35f;
   const cv::Vec3f b(b_blue, b_green, (lum_a - 0.114f * b_blue - 0.587f * b_green) / 0.299f);
-  Scene scene;
-  scene.virtual_image = EdgeImage(64, 48, 32.0, a, b);
-  scene.input_image = EdgeImage(64, 48, 32.5, a, b);
-  scene.depth = cv::Mat(48, 64, CV_32FC1, cv::Scalar(1.0f));
-  cv::Mat region(48, 64, CV_8UC1, cv::Scalar(0));
-  region(cv::Rect(8, 8, 48, 32)).setTo(255);
+  const Scene scene = EdgeScene(32.0, 32.5, a, b);
+  const cv::Mat region = EdgeSceneRegion();
   PreprocessOptions pre;
   pre.use_linf = false;
   PixelSelectionOptions options;
@@ -181,12 +194,8 @@ TEST(PixelSelection, BlocksTellACoherentOccluderFromAMisalignment) {
 
 TEST(PixelSelection, NormalFlowBoundRejectsLargeMotion) {
   const cv::Vec3f dark(0.2f, 0.2f, 0.2f), bright(0.8f, 0.8f, 0.8f);
-  Scene scene;
-  scene.virtual_image = EdgeImage(64, 48, 30.0, dark, bright);
-  scene.input_image = EdgeImage(64, 48, 36.0, dark, bright);  // 6 px away
-  scene.depth = cv::Mat(48, 64, CV_32FC1, cv::Scalar(1.0f));
-  cv::Mat region(48, 64, CV_8UC1, cv::Scalar(0));
-  region(cv::Rect(8, 8, 48, 32)).setTo(255);
+  const Scene scene = EdgeScene(30.0, 36.0, dark, bright);  // 6 px apart
+  const cv::Mat region = EdgeSceneRegion();
   PreprocessOptions pre;
   pre.use_linf = false;
   PixelSelectionOptions options;

@@ -12,42 +12,20 @@
 
 #include "unseen/mesh/primitives.h"
 #include "unseen/render/rasterizer.h"
+#include "unseen/track/test_scene.h"
 
 namespace unseen {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-Rig OneCameraRig() {
-  Rig rig;
-  rig.cameras.push_back({"cam0", PinholeCamera::Centered(512, 256, 837.3), Rigid3d()});
-  return rig;
-}
+using testing::Background;
+using testing::OneCameraRig;
 
-// A smooth, mildly textured background.
-cv::Mat Background(const PinholeCamera& cam, int seed) {
-  cv::RNG rng(seed);
-  cv::Mat small(cam.height / 32 + 1, cam.width / 32 + 1, CV_32FC3);
-  rng.fill(small, cv::RNG::UNIFORM, 0.3, 0.8);
-  cv::Mat out;
-  cv::resize(small, out, cv::Size(cam.width, cam.height), 0, 0, cv::INTER_CUBIC);
-  return out;
-}
-
-// The model rendered at `world_from_obj` over `background`, 2x2 supersampled.
+// The model rendered over `background`, 2x2 supersampled.
 cv::Mat Synthesize(const Mesh& mesh, const RigCamera& camera, const Rigid3d& world_from_obj,
                    const cv::Mat& background) {
-  const PinholeCamera fine = camera.intrinsics.Scaled(0.5);
-  RenderBuffers buffers;
-  Render(mesh, fine, camera.cam_from_world() * world_from_obj, fine.ImageRect(), RenderOptions(),
-         &buffers);
-  cv::Mat big;
-  cv::resize(background, big, cv::Size(fine.width, fine.height), 0, 0, cv::INTER_LINEAR);
-  buffers.color.copyTo(big, buffers.mask);
-  cv::Mat out;
-  cv::resize(big, out, cv::Size(camera.intrinsics.width, camera.intrinsics.height), 0, 0,
-             cv::INTER_AREA);
-  return out;
+  return testing::RenderOverBackground(mesh, camera, world_from_obj, background);
 }
 
 Rigid3d CubePose() {

@@ -2,6 +2,7 @@
 #include "unseen/track/tracker.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -136,10 +137,9 @@ void Tracker::SetModel(Mesh model) {
     lo = lo.cwiseMin(v.cast<double>());
     hi = hi.cwiseMax(v.cast<double>());
   }
-  box_corners_.clear();
   for (int k = 0; k < 8; ++k) {
-    box_corners_.emplace_back(k & 1 ? hi.x() : lo.x(), k & 2 ? hi.y() : lo.y(),
-                              k & 4 ? hi.z() : lo.z());
+    box_corners_[k] = Eigen::Vector3d(k & 1 ? hi.x() : lo.x(), k & 2 ? hi.y() : lo.y(),
+                                      k & 4 ? hi.z() : lo.z());
   }
   model_ = std::make_shared<const Mesh>(std::move(model));
   reacquisition_.reset();
@@ -155,9 +155,8 @@ std::optional<PixelRect> Tracker::ObjectRect(const PinholeCamera& camera,
   const std::optional<PixelRect> sphere =
       camera.SphereRect(cam_from_obj * sphere_centre_, sphere_radius_);
   if (!sphere) return std::nullopt;
-  std::vector<Eigen::Vector3d> corners;
-  corners.reserve(box_corners_.size());
-  for (const Eigen::Vector3d& p : box_corners_) corners.push_back(cam_from_obj * p);
+  std::array<Eigen::Vector3d, 8> corners;
+  for (int k = 0; k < 8; ++k) corners[k] = cam_from_obj * box_corners_[k];
   const std::optional<PixelRect> box = camera.PointsRect(corners);
   if (!box) return sphere;  // a corner behind the camera: the sphere's rectangle
   const PixelRect both = box->Intersect(*sphere);
@@ -491,7 +490,9 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
   const int margin =
       static_cast<int>(std::ceil(3.0 * options_.preprocess.blur_sigma_px)) + po.rim_px + 2;
   const bool input_gradients = options_.selection.use_occlusion_rejection;
-  std::vector<FlowEquations> equations(ncam);
+  // Reused from frame to frame, so that the equations keep their capacity.
+  std::vector<FlowEquations>& equations = equations_;
+  equations.resize(ncam);
   std::vector<SelectionCounts> camera_counts(ncam);
   std::vector<int> jobs;  // c: camera c's virtual image; ncam + c: its input
   for (auto& w : work_) {
@@ -657,11 +658,8 @@ TrackResult Tracker::AlignPredicted(const std::vector<cv::Mat>& images,
   const double reach_px = po.capture_px * double(1 << (levels - 1));
   if (levels < full && (r.confidence < trust || r.summary.correction_px > 0.75 * reach_px)) {
     TrackResult with_all = AlignChecked(images, predicted, full);
-    const StageTimes both = [&] {
-      StageTimes t = r.summary.times;
-      t += with_all.summary.times;
-      return t;
-    }();
+    StageTimes both = r.summary.times;  // both alignments were paid for
+    both += with_all.summary.times;
     if (with_all.confidence >= r.confidence) r = std::move(with_all);
     r.summary.times = both;
   }

@@ -10,6 +10,7 @@
 // run on several threads (TrackerOptions::threads).
 #pragma once
 
+#include <array>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -146,11 +147,12 @@ class Tracker {
   std::shared_ptr<const Mesh> model_;
   Eigen::Vector3d sphere_centre_ = Eigen::Vector3d::Zero();  // object frame
   double sphere_radius_ = 0.0;
-  std::vector<Eigen::Vector3d> box_corners_;  // the model's axis-aligned box, object frame
+  std::array<Eigen::Vector3d, 8> box_corners_;  // the model's axis-aligned box, object frame
   TrackerOptions options_;
   std::unique_ptr<MotionPredictor> predictor_;
   std::unique_ptr<ThreadPool> pool_;  // null with one thread
   std::vector<std::unique_ptr<CameraWork>> work_;
+  std::vector<FlowEquations> equations_;  // per camera, the current round's
 
   bool initialized_ = false;
   TrackStatus status_ = TrackStatus::kTracking;
