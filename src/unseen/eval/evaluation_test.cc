@@ -9,6 +9,7 @@
 #include <random>
 #include <sstream>
 
+#include "unseen/eval/test_sequence.h"
 #include "unseen/util/error.h"
 
 namespace unseen {
@@ -27,22 +28,9 @@ std::vector<GroundTruthFrame> MakeGroundTruth(int n) {
   return gt;
 }
 
-std::vector<PoseRecord> AsStream(const std::vector<GroundTruthFrame>& gt) {
-  std::vector<PoseRecord> records;
-  for (const GroundTruthFrame& g : gt) {
-    if (!g.world_from_obj) continue;
-    PoseRecord r;
-    r.frame = g.frame;
-    r.time_s = g.frame / 30.0;
-    r.world_from_obj = *g.world_from_obj;
-    records.push_back(r);
-  }
-  return records;
-}
-
 TEST(Evaluation, GroundTruthAgainstItselfIsZeroError) {
   const auto gt = MakeGroundTruth(30);
-  const EvaluationResult r = Evaluate(gt, AsStream(gt));
+  const EvaluationResult r = Evaluate(gt, testing::PerfectPoseStream(gt));
   EXPECT_EQ(r.frames, 30);
   EXPECT_EQ(r.scored_frames, 30);
   EXPECT_EQ(r.lost_frames, 0);
@@ -58,7 +46,7 @@ TEST(Evaluation, GroundTruthAgainstItselfIsZeroError) {
 
 TEST(Evaluation, ConstantTranslationOffsetGivesKnownError) {
   const auto gt = MakeGroundTruth(25);
-  auto poses = AsStream(gt);
+  auto poses = testing::PerfectPoseStream(gt);
   for (PoseRecord& p : poses) {
     p.world_from_obj.set_translation(p.world_from_obj.translation() + Eigen::Vector3d(0.010, 0, 0));
   }
@@ -77,7 +65,7 @@ TEST(Evaluation, ConstantTranslationOffsetGivesKnownError) {
 
 TEST(Evaluation, RotationAboutObjectZGivesKnownError) {
   const auto gt = MakeGroundTruth(20);
-  auto poses = AsStream(gt);
+  auto poses = testing::PerfectPoseStream(gt);
   const Rigid3d rot_z(ExpSO3(Eigen::Vector3d(0, 0, 3.0 * kDegToRad)), Eigen::Vector3d::Zero());
   for (PoseRecord& p : poses) p.world_from_obj = p.world_from_obj * rot_z;  // in the object frame
   const EvaluationResult r = Evaluate(gt, poses);
@@ -102,7 +90,7 @@ TEST(Evaluation, RotationAboutObjectZGivesKnownError) {
 
 TEST(Evaluation, LostFramesCountAsFailuresButNotInErrorStats) {
   const auto gt = MakeGroundTruth(10);
-  auto poses = AsStream(gt);
+  auto poses = testing::PerfectPoseStream(gt);
   // Frames 4 and 7 lost (with a wild pose that must not enter the statistics); 8 searching.
   for (int f : {4, 7}) {
     poses[f].status = TrackStatus::kLost;
@@ -124,7 +112,7 @@ TEST(Evaluation, LostFramesCountAsFailuresButNotInErrorStats) {
 
 TEST(Evaluation, MissingFramesCountAsFailures) {
   const auto gt = MakeGroundTruth(10);
-  auto poses = AsStream(gt);
+  auto poses = testing::PerfectPoseStream(gt);
   poses.erase(poses.begin() + 6, poses.end());  // frames 6..9 missing
   poses.erase(poses.begin() + 2);               // frame 2 missing
   const EvaluationResult r = Evaluate(gt, poses);
@@ -138,7 +126,7 @@ TEST(Evaluation, MissingFramesCountAsFailures) {
 
 TEST(Evaluation, FramesWithoutGroundTruthAreNotScored) {
   auto gt = MakeGroundTruth(10);
-  auto poses = AsStream(gt);
+  auto poses = testing::PerfectPoseStream(gt);
   gt[3].world_from_obj.reset();
   poses[3].world_from_obj.set_translation(Eigen::Vector3d(9, 9, 9));
   const EvaluationResult r = Evaluate(gt, poses);
@@ -149,7 +137,7 @@ TEST(Evaluation, FramesWithoutGroundTruthAreNotScored) {
 
 TEST(Evaluation, FirstFailureFrameIsWhereErrorExceedsThreshold) {
   const auto gt = MakeGroundTruth(40);
-  auto poses = AsStream(gt);
+  auto poses = testing::PerfectPoseStream(gt);
   // Drift of 2.1 mm per frame in y: 5 cm exceeded first at frame 24 (50.4 mm).
   for (PoseRecord& p : poses) {
     p.world_from_obj.set_translation(p.world_from_obj.translation() +
@@ -167,7 +155,7 @@ TEST(Evaluation, FirstFailureFrameIsWhereErrorExceedsThreshold) {
   EXPECT_NEAR(r.trans_err_mm.rms, std::sqrt(sum_sq / 40), 1e-9);
 
   // A rotation beyond 5 deg fails too, with zero translation error.
-  auto rotated = AsStream(gt);
+  auto rotated = testing::PerfectPoseStream(gt);
   const Rigid3d rot(ExpSO3(Eigen::Vector3d(6.0 * kDegToRad, 0, 0)), Eigen::Vector3d::Zero());
   rotated[12].world_from_obj = rotated[12].world_from_obj * rot;
   EXPECT_EQ(Evaluate(gt, rotated).first_failure_frame, 12);
@@ -177,7 +165,7 @@ TEST(Evaluation, AlignFirstRemovesConstantOffsetExactly) {
   const auto gt = MakeGroundTruth(30);
   // The system chose its own object frame: est = gt * obj_gt_from_obj_est.
   const Rigid3d offset(ExpSO3(Eigen::Vector3d(0.4, -1.1, 2.0)), Eigen::Vector3d(0.03, -0.05, 0.08));
-  auto poses = AsStream(gt);
+  auto poses = testing::PerfectPoseStream(gt);
   for (PoseRecord& p : poses) p.world_from_obj = p.world_from_obj * offset;
 
   const EvaluationResult raw = Evaluate(gt, poses);
@@ -198,7 +186,7 @@ TEST(Evaluation, AlignFirstRemovesConstantOffsetExactly) {
 TEST(Evaluation, AlignFirstSkipsLostLeadingFrames) {
   const auto gt = MakeGroundTruth(10);
   const Rigid3d offset(ExpSO3(Eigen::Vector3d(0, 0.5, 0)), Eigen::Vector3d(0.1, 0, 0));
-  auto poses = AsStream(gt);
+  auto poses = testing::PerfectPoseStream(gt);
   for (PoseRecord& p : poses) p.world_from_obj = p.world_from_obj * offset;
   poses[0].status = TrackStatus::kSearching;
   poses[0].world_from_obj = Rigid3d();
@@ -212,7 +200,7 @@ TEST(Evaluation, AlignFirstSkipsLostLeadingFrames) {
 
 TEST(Evaluation, FpsFromProcessTime) {
   const auto gt = MakeGroundTruth(4);
-  auto poses = AsStream(gt);
+  auto poses = testing::PerfectPoseStream(gt);
   const double ms[] = {10.0, 20.0, 30.0, 40.0};  // 4 frames in 0.1 s
   for (int i = 0; i < 4; ++i) poses[i].process_ms = ms[i];
   const EvaluationResult r = Evaluate(gt, poses);
@@ -226,7 +214,7 @@ TEST(Evaluation, FpsFromProcessTime) {
 
 TEST(Evaluation, JsonHasKeysWithValues) {
   const auto gt = MakeGroundTruth(10);
-  auto poses = AsStream(gt);
+  auto poses = testing::PerfectPoseStream(gt);
   for (PoseRecord& p : poses) {
     p.world_from_obj.set_translation(p.world_from_obj.translation() + Eigen::Vector3d(0, 0, 0.03));
   }
@@ -268,7 +256,7 @@ TEST(Evaluation, NoScoredFrameGivesNullStatistics) {
 
 TEST(Evaluation, TableShowsFigures) {
   const auto gt = MakeGroundTruth(5);
-  auto poses = AsStream(gt);
+  auto poses = testing::PerfectPoseStream(gt);
   for (PoseRecord& p : poses) p.process_ms = 25.0;
   const std::string table = Evaluate(gt, poses).Table();
   EXPECT_NE(table.find("100.00 %"), std::string::npos) << table;
@@ -278,7 +266,7 @@ TEST(Evaluation, TableShowsFigures) {
 
 TEST(Evaluation, BadInputThrows) {
   const auto gt = MakeGroundTruth(5);
-  auto poses = AsStream(gt);
+  auto poses = testing::PerfectPoseStream(gt);
   auto dup = poses;
   dup.push_back(poses[2]);
   EXPECT_THROW(Evaluate(gt, dup), Error);
@@ -312,7 +300,7 @@ TEST(Evaluation, BadInputThrows) {
 
 TEST(Evaluation, PerFrameCsv) {
   const auto gt = MakeGroundTruth(4);
-  auto poses = AsStream(gt);
+  auto poses = testing::PerfectPoseStream(gt);
   poses[1].status = TrackStatus::kLost;
   poses.pop_back();
   const EvaluationResult r = Evaluate(gt, poses);

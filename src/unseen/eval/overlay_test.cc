@@ -7,6 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <set>
 
+#include "unseen/eval/test_sequence.h"
 #include "unseen/mesh/primitives.h"
 #include "unseen/util/error.h"
 
@@ -31,18 +32,6 @@ cv::Mat FullMask(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& c
   return buffers.mask;
 }
 
-// Mask pixels with a 4-neighbour outside the mask (or on the image border).
-bool IsBoundary(const cv::Mat& mask, int x, int y) {
-  if (mask.at<uint8_t>(y, x) == 0) return false;
-  const int dx[] = {1, -1, 0, 0}, dy[] = {0, 0, 1, -1};
-  for (int k = 0; k < 4; ++k) {
-    const int u = x + dx[k], v = y + dy[k];
-    if (u < 0 || v < 0 || u >= mask.cols || v >= mask.rows) return true;
-    if (mask.at<uint8_t>(v, u) == 0) return true;
-  }
-  return false;
-}
-
 std::string TempPath(const std::string& name) {
   return (fs::temp_directory_path() / ("unseen_overlay_test_" + name)).string();
 }
@@ -58,13 +47,13 @@ TEST(Overlay, OutlineLiesOnSilhouetteBoundary) {
   std::set<std::pair<int, int>> on_outline;
   for (const cv::Point& p : outline[0]) {
     ASSERT_TRUE(camera.InImage(Eigen::Vector2d(p.x, p.y)));
-    EXPECT_TRUE(IsBoundary(mask, p.x, p.y)) << p;
+    EXPECT_TRUE(testing::IsMaskBoundary(mask, p.x, p.y)) << p;
     on_outline.insert({p.x, p.y});
   }
   int boundary = 0, covered = 0;
   for (int y = 0; y < mask.rows; ++y) {
     for (int x = 0; x < mask.cols; ++x) {
-      if (!IsBoundary(mask, x, y)) continue;
+      if (!testing::IsMaskBoundary(mask, x, y)) continue;
       ++boundary;
       covered += on_outline.count({x, y});
     }
@@ -105,7 +94,7 @@ TEST(Overlay, DrawsEstimateAndGroundTruthInTheirColours) {
     for (int x = 0; x < image.cols; ++x) {
       if (image.at<cv::Vec3b>(y, x) != cv::Vec3b(0, 255, 0)) continue;
       ++green;
-      EXPECT_TRUE(IsBoundary(mask, x, y)) << x << "," << y;
+      EXPECT_TRUE(testing::IsMaskBoundary(mask, x, y)) << x << "," << y;
     }
   }
   EXPECT_GT(green, 100);
@@ -127,10 +116,10 @@ TEST(Overlay, DrawsEstimateAndGroundTruthInTheirColours) {
       const cv::Vec3b px = image.at<cv::Vec3b>(y, x);
       if (px == cv::Vec3b(0, 0, 255)) {
         ++red;
-        EXPECT_TRUE(IsBoundary(mask, x, y));
+        EXPECT_TRUE(testing::IsMaskBoundary(mask, x, y));
       } else if (px == cv::Vec3b(255, 128, 0)) {
         ++blue;
-        EXPECT_TRUE(IsBoundary(gt_mask, x, y));
+        EXPECT_TRUE(testing::IsMaskBoundary(gt_mask, x, y));
       }
       EXPECT_NE(px, cv::Vec3b(0, 255, 0));
     }

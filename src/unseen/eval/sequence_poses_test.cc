@@ -9,6 +9,7 @@
 
 #include "unseen/eval/overlay.h"
 #include "unseen/eval/test_sequence.h"
+#include "unseen/util/testing.h"
 #include "unseen/util/error.h"
 
 namespace unseen {
@@ -18,36 +19,6 @@ namespace fs = std::filesystem;
 
 std::string TempPath(const std::string& name) {
   return (fs::temp_directory_path() / ("unseen_sequence_poses_test_" + name)).string();
-}
-
-std::string DevSequence(const std::string& name) {
-  return std::string(UNSEEN_SOURCE_DIR) + "/../shared/data/sequences/" + name;
-}
-
-std::vector<PoseRecord> StreamOf(const std::vector<GroundTruthFrame>& gt) {
-  std::vector<PoseRecord> records;
-  for (const GroundTruthFrame& g : gt) {
-    if (!g.world_from_obj) continue;
-    PoseRecord r;
-    r.frame = g.frame;
-    r.time_s = g.frame / 30.0;
-    r.world_from_obj = *g.world_from_obj;
-    r.process_ms = 20.0;
-    records.push_back(r);
-  }
-  return records;
-}
-
-// Mask pixels with a 4-neighbour outside the mask (or on the image border).
-bool IsBoundary(const cv::Mat& mask, int x, int y) {
-  if (mask.at<uint8_t>(y, x) == 0) return false;
-  const int dx[] = {1, -1, 0, 0}, dy[] = {0, 0, 1, -1};
-  for (int k = 0; k < 4; ++k) {
-    const int u = x + dx[k], v = y + dy[k];
-    if (u < 0 || v < 0 || u >= mask.cols || v >= mask.rows) return true;
-    if (mask.at<uint8_t>(v, u) == 0) return true;
-  }
-  return false;
 }
 
 TEST(SequencePoses, SyntheticSequenceGroundTruthScoresZero) {
@@ -63,7 +34,7 @@ TEST(SequencePoses, SyntheticSequenceGroundTruthScoresZero) {
   }
 
   // A CSV stream 5 mm off in world z, read back through ReadPosesForSequence.
-  auto records = StreamOf(gt);
+  auto records = testing::PerfectPoseStream(gt, 20.0);
   for (PoseRecord& r : records) {
     r.world_from_obj.set_translation(r.world_from_obj.translation() + Eigen::Vector3d(0, 0, 0.005));
   }
@@ -79,7 +50,7 @@ TEST(SequencePoses, SyntheticSequenceGroundTruthScoresZero) {
 
   // The BOP export of the truth, outside the sequence: placed through the reference camera.
   const std::string bop = TempPath("scene_gt.json");
-  ExportBopSceneGt(bop, StreamOf(gt), sequence.rig().cameras[0].cam_from_world(), 1);
+  ExportBopSceneGt(bop, testing::PerfectPoseStream(gt, 20.0), sequence.rig().cameras[0].cam_from_world(), 1);
   EXPECT_TRUE(IsBopSceneGt(bop));
   const EvaluationResult rb = Evaluate(gt, ReadPosesForSequence(bop, sequence));
   EXPECT_EQ(rb.scored_frames, 4);
@@ -100,7 +71,7 @@ TEST(SequencePoses, JsonLinesWithJsonExtensionIsAStream) {
   const Sequence sequence = Sequence::Open(written.dir);
   const auto gt = SequenceGroundTruth(sequence);
   for (int n : {1, 2}) {  // one line parses as one JSON object too
-    auto records = StreamOf(gt);
+    auto records = testing::PerfectPoseStream(gt, 20.0);
     records.resize(n);
     const std::string path = TempPath("stream.json");
     WritePoseStream(path, records);
@@ -133,7 +104,7 @@ TEST(SequencePoses, BadInputThrows) {
 TEST(SequencePoses, OverlayOfSyntheticSequenceOutlinesTheObject) {
   const auto written = testing::WriteTestSequence(TempPath("seq_overlay"), 3);
   const Sequence sequence = Sequence::Open(written.dir);
-  auto records = StreamOf(SequenceGroundTruth(sequence));
+  auto records = testing::PerfectPoseStream(SequenceGroundTruth(sequence), 20.0);
   records[2].status = TrackStatus::kLost;
   const std::string out = TempPath("overlay_frames");
   fs::remove_all(out);
@@ -159,7 +130,7 @@ TEST(SequencePoses, OverlayOfSyntheticSequenceOutlinesTheObject) {
         blue += px == cv::Vec3b(255, 128, 0);
         if (px != expected) continue;
         ++outline;
-        EXPECT_TRUE(IsBoundary(buffers.mask, x, y)) << "frame " << i << " at " << x << "," << y;
+        EXPECT_TRUE(testing::IsMaskBoundary(buffers.mask, x, y)) << "frame " << i << " at " << x << "," << y;
       }
     }
     EXPECT_GT(outline, 60) << i;
@@ -177,12 +148,12 @@ TEST(SequencePoses, OverlayOfSyntheticSequenceOutlinesTheObject) {
 }
 
 TEST(SequencePoses, DevSequenceGroundTruthRoundTripScoresZero) {
-  const std::string path = DevSequence("cube_white_zigzag");
+  const std::string path = testing::DevSequencesDir() + "cube_white_zigzag";
   if (!fs::exists(path)) GTEST_SKIP() << "no development sequences at " << path;
   const Sequence sequence = Sequence::Open(path);
   const auto gt = SequenceGroundTruth(sequence);
   const std::string stream = TempPath("zigzag.jsonl");
-  WritePoseStream(stream, StreamOf(gt));
+  WritePoseStream(stream, testing::PerfectPoseStream(gt, 20.0));
   const EvaluationResult r = Evaluate(gt, ReadPosesForSequence(stream, sequence));
   fs::remove(stream);
   EXPECT_EQ(r.frames, sequence.num_frames());
@@ -195,7 +166,7 @@ TEST(SequencePoses, DevSequenceGroundTruthRoundTripScoresZero) {
 }
 
 TEST(SequencePoses, DevRigBopFilesArePlacedThroughTheirCamera) {
-  const std::string path = DevSequence("rig5_cube_fig312");
+  const std::string path = testing::DevSequencesDir() + "rig5_cube_fig312";
   if (!fs::exists(path)) GTEST_SKIP() << "no development sequences at " << path;
   const Sequence sequence = Sequence::Open(path);
   const auto gt = SequenceGroundTruth(sequence);

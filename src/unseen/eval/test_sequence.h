@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "unseen/eval/evaluation.h"
+#include "unseen/io/pose_stream.h"
 #include "unseen/io/sequence.h"
 #include "unseen/mesh/primitives.h"
 #include "unseen/render/rasterizer.h"
@@ -68,6 +70,35 @@ inline TestSequence WriteTestSequence(const std::string& dir, int frames,
   }
   writer.Finish();
   return seq;
+}
+
+// A pose stream that reports every ground-truth pose exactly (30 fps time stamps), with
+// `process_ms` as each record's timing when given.
+inline std::vector<PoseRecord> PerfectPoseStream(const std::vector<GroundTruthFrame>& gt,
+                                                 std::optional<double> process_ms = {}) {
+  std::vector<PoseRecord> records;
+  for (const GroundTruthFrame& g : gt) {
+    if (!g.world_from_obj) continue;
+    PoseRecord r;
+    r.frame = g.frame;
+    r.time_s = g.frame / 30.0;
+    r.world_from_obj = *g.world_from_obj;
+    r.process_ms = process_ms;
+    records.push_back(r);
+  }
+  return records;
+}
+
+// Whether mask pixel (x, y) is set and has a 4-neighbour outside the mask (or the image).
+inline bool IsMaskBoundary(const cv::Mat& mask, int x, int y) {
+  if (mask.at<uint8_t>(y, x) == 0) return false;
+  const int dx[] = {1, -1, 0, 0}, dy[] = {0, 0, 1, -1};
+  for (int k = 0; k < 4; ++k) {
+    const int u = x + dx[k], v = y + dy[k];
+    if (u < 0 || v < 0 || u >= mask.cols || v >= mask.rows) return true;
+    if (mask.at<uint8_t>(v, u) == 0) return true;
+  }
+  return false;
 }
 
 }  // namespace unseen::testing
