@@ -5,14 +5,8 @@
 # <module>/foo_test; every foo_benchmark.cc a Google Benchmark executable (when
 # UNSEEN_BUILD_BENCHMARKS is on).
 function(unseen_compile_options target)
+  # Warnings only: instruction set and sanitizers are build-wide (top-level CMakeLists.txt).
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wno-unused-parameter)
-  if(UNSEEN_NATIVE)
-    target_compile_options(${target} PRIVATE -march=native)
-  endif()
-  if(UNSEEN_ENABLE_ASAN)
-    target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer)
-    target_link_options(${target} PRIVATE -fsanitize=address,undefined)
-  endif()
 endfunction()
 
 function(unseen_module)
