@@ -95,98 +95,183 @@ void FlowSolverOptions::Check() const {
   UNSEEN_CHECK(damping >= 0.0 && damping < 1.0, "solver.damping {} must be in [0, 1)", damping);
 }
 
-FlowSolution SolveFlow(const std::vector<FlowEquations>& cameras,
-                       const FlowSolverOptions& options) {
-  FlowSolution out;
-  double sum_sq0 = 0.0;
-  for (const FlowEquations& eq : cameras) {
-    out.equations += eq.size();
-    for (int i = 0; i < eq.size(); ++i) {
-      const double r = eq.rhs[i] * eq.inv_grad_norm[i];
-      sum_sq0 += r * r;
-    }
-  }
-  if (out.equations == 0) return out;
-  out.initial_rms_px = std::sqrt(sum_sq0 / out.equations);
-  if (out.equations < options.min_equations) return out;
+void ResidualModel::Check(const std::string& what) const {
+  UNSEEN_CHECK(kernel_width > 0.0 && std::isfinite(kernel_width),
+               "{}.kernel_width {} must be > 0", what, kernel_width);
+  UNSEEN_CHECK(min_scale > 0.0 && std::isfinite(min_scale), "{}.min_scale {} must be > 0", what,
+               min_scale);
+  UNSEEN_CHECK(min_noise > 0.0 && std::isfinite(min_noise), "{}.min_noise {} must be > 0", what,
+               min_noise);
+  UNSEEN_CHECK(weight > 0.0 && std::isfinite(weight), "{}.weight {} must be > 0", what, weight);
+}
 
-  std::vector<std::vector<float>> weights(cameras.size());
-  std::vector<float> abs_residuals;
+int ModalityEquations::size() const {
+  int n = 0;
+  for (const FlowEquations& eq : cameras) n += eq.size();
+  return n;
+}
+
+void ModalityEquations::Clear() {
+  for (FlowEquations& eq : cameras) eq.Clear();
+}
+
+namespace {
+
+// 1.4826 times the median of the values (a robust standard deviation), from an even spread of
+// at most 1 024 of them: the scale needs a few per cent accuracy, and the selection is the
+// solve's costliest part. Reorders `values`.
+double RobustSigma(std::vector<float>* values) {
+  if (values->empty()) return 0.0;
+  constexpr size_t kScaleSamples = 1024;
+  const size_t stride = (values->size() + kScaleSamples - 1) / kScaleSamples;
+  size_t kept = 0;
+  for (size_t i = 0; i < values->size(); i += stride) (*values)[kept++] = (*values)[i];
+  const size_t mid = kept / 2;
+  std::nth_element(values->begin(), values->begin() + mid, values->begin() + kept);
+  return 1.4826 * (*values)[mid];
+}
+
+// The per-modality working state of the solve.
+struct ModalityWork {
+  const ModalityEquations* eq = nullptr;
+  std::vector<std::vector<float>> weights;  // per camera; residuals before they become weights
+  std::vector<float> abs_normalized, abs_row;
+  double noise = 0.0;
+  ModalityStats stats;
+};
+
+}  // namespace
+
+FlowSolution SolveJoint(const std::vector<const ModalityEquations*>& modalities,
+                        const FlowSolverOptions& options) {
+  FlowSolution out;
+  std::vector<ModalityWork> work(modalities.size());
+  bool robust = false;
+  for (size_t m = 0; m < modalities.size(); ++m) {
+    ModalityWork& mw = work[m];
+    mw.eq = modalities[m];
+    if (!mw.eq || mw.eq->size() == 0) continue;
+    mw.stats.equations = mw.eq->size();
+    out.equations += mw.stats.equations;
+    robust |= mw.eq->model.kernel != RobustKernel::kNone;
+    // Initial residuals: the right-hand sides (the residuals at a zero twist).
+    double sum_sq = 0.0;
+    mw.abs_row.clear();
+    for (const FlowEquations& eq : mw.eq->cameras) {
+      for (int i = 0; i < eq.size(); ++i) {
+        const double r = eq.rhs[i] * eq.inv_grad_norm[i];
+        sum_sq += r * r;
+        mw.abs_row.push_back(std::abs(eq.rhs[i]));
+      }
+    }
+    mw.stats.initial_rms = std::sqrt(sum_sq / mw.stats.equations);
+    mw.noise = std::max(RobustSigma(&mw.abs_row), mw.eq->model.min_noise);
+    mw.weights.resize(mw.eq->cameras.size());
+  }
+  auto finish_stats = [&] {
+    for (const ModalityWork& mw : work) out.modalities.push_back(mw.stats);
+    if (!work.empty()) {
+      out.initial_rms_px = work[0].stats.initial_rms;
+      out.final_rms_px = work[0].stats.final_rms;
+      out.robust_scale_px = work[0].stats.robust_scale;
+    }
+  };
+  if (out.equations == 0 || out.equations < options.min_equations) {
+    finish_stats();
+    return out;
+  }
+
   Vector6d twist = Vector6d::Zero();
-  const int solves = 1 + (options.kernel == RobustKernel::kNone ? 0 : options.irls_iterations);
+  const int solves = 1 + (robust ? options.irls_iterations : 0);
   for (int pass = 0; pass < solves; ++pass) {
     Matrix6d h = Matrix6d::Zero();
     Vector6d g = Vector6d::Zero();
-    for (size_t c = 0; c < cameras.size(); ++c) {
-      const FlowEquations& eq = cameras[c];
-      if (eq.size() == 0) continue;
-      Matrix6d hc;
-      Vector6d gc;
-      Accumulate(eq, pass == 0 ? nullptr : &weights[c], &hc, &gc);
-      // twist_c = B twist with B = blockdiag(R_cw, R_cw): H = B^T Hc B, g = B^T gc.
-      Matrix6d b = Matrix6d::Zero();
-      const Eigen::Matrix3d r_cw = eq.world_from_cam_rotation.transpose();
-      b.topLeftCorner<3, 3>() = r_cw;
-      b.bottomRightCorner<3, 3>() = r_cw;
-      h.noalias() += b.transpose() * hc * b;
-      g.noalias() += b.transpose() * gc;
+    for (ModalityWork& mw : work) {
+      if (mw.stats.equations == 0) continue;
+      const double lambda = mw.eq->model.weight / (mw.noise * mw.noise);
+      for (size_t c = 0; c < mw.eq->cameras.size(); ++c) {
+        const FlowEquations& eq = mw.eq->cameras[c];
+        if (eq.size() == 0) continue;
+        Matrix6d hc;
+        Vector6d gc;
+        Accumulate(eq, pass == 0 ? nullptr : &mw.weights[c], &hc, &gc);
+        // twist_c = B twist with B = blockdiag(R_cw, R_cw): H = B^T Hc B, g = B^T gc.
+        Matrix6d b = Matrix6d::Zero();
+        const Eigen::Matrix3d r_cw = eq.world_from_cam_rotation.transpose();
+        b.topLeftCorner<3, 3>() = r_cw;
+        b.bottomRightCorner<3, 3>() = r_cw;
+        h.noalias() += lambda * (b.transpose() * hc * b);
+        g.noalias() += lambda * (b.transpose() * gc);
+      }
     }
     const double trace = h.trace();
-    if (!(trace > 0.0) || !std::isfinite(trace)) return out;
+    if (!(trace > 0.0) || !std::isfinite(trace)) break;
     Matrix6d damped = h;
     damped.diagonal().array() += options.damping * trace / 6.0;
     Eigen::LDLT<Matrix6d> ldlt(damped);
-    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return out;
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) break;
     const Vector6d x = ldlt.solve(g);
-    if (!x.allFinite()) return out;
+    if (!x.allFinite()) break;
     twist = x;
     out.min_eigenvalue = Eigen::SelfAdjointEigenSolver<Matrix6d>(h, Eigen::EigenvaluesOnly)
                              .eigenvalues()(0);
 
-    // Residuals of the linear model, normalized to pixels of normal flow.
-    abs_residuals.resize(out.equations);
-    float* abs_out = abs_residuals.data();
-    double sum_sq = 0.0;
-    for (size_t c = 0; c < cameras.size(); ++c) {
-      const FlowEquations& eq = cameras[c];
-      if (eq.size() == 0) continue;
-      const Eigen::Matrix3d r_cw = eq.world_from_cam_rotation.transpose();
-      Eigen::Matrix<float, 6, 1> tc;
-      tc.head<3>() = (r_cw * twist.head<3>()).cast<float>();
-      tc.tail<3>() = (r_cw * twist.tail<3>()).cast<float>();
-      weights[c].resize(eq.size());
-      float* res = weights[c].data();  // residuals for now, turned into weights below
-      double camera_sum_sq = 0.0;     // a local, so that it stays in a register
-      for (int i = 0; i < eq.size(); ++i) {
-        const float r = (eq.rows[i].dot(tc) - eq.rhs[i]) * eq.inv_grad_norm[i];
-        res[i] = r;
-        *abs_out++ = std::abs(r);
-        camera_sum_sq += double(r) * r;
+    // Residuals of the linear model, normalized and in row units.
+    for (ModalityWork& mw : work) {
+      if (mw.stats.equations == 0) continue;
+      mw.abs_normalized.resize(mw.stats.equations);
+      mw.abs_row.resize(mw.stats.equations);
+      float* abs_out = mw.abs_normalized.data();
+      float* abs_row = mw.abs_row.data();
+      double sum_sq = 0.0;
+      for (size_t c = 0; c < mw.eq->cameras.size(); ++c) {
+        const FlowEquations& eq = mw.eq->cameras[c];
+        mw.weights[c].resize(eq.size());
+        if (eq.size() == 0) continue;
+        const Eigen::Matrix3d r_cw = eq.world_from_cam_rotation.transpose();
+        Eigen::Matrix<float, 6, 1> tc;
+        tc.head<3>() = (r_cw * twist.head<3>()).cast<float>();
+        tc.tail<3>() = (r_cw * twist.tail<3>()).cast<float>();
+        float* res = mw.weights[c].data();  // residuals for now, turned into weights below
+        double camera_sum_sq = 0.0;        // a local, so that it stays in a register
+        for (int i = 0; i < eq.size(); ++i) {
+          const float e = eq.rows[i].dot(tc) - eq.rhs[i];
+          const float r = e * eq.inv_grad_norm[i];
+          res[i] = r;
+          *abs_out++ = std::abs(r);
+          *abs_row++ = std::abs(e);
+          camera_sum_sq += double(r) * r;
+        }
+        sum_sq += camera_sum_sq;
       }
-      sum_sq += camera_sum_sq;
+      mw.stats.final_rms = std::sqrt(sum_sq / mw.stats.equations);
+      if (pass + 1 == solves) continue;
+      const ResidualModel& model = mw.eq->model;
+      const double scale = std::max(RobustSigma(&mw.abs_normalized), model.min_scale);
+      mw.stats.robust_scale = scale;
+      mw.noise = std::max(RobustSigma(&mw.abs_row), model.min_noise);
+      const double width = model.kernel_width * scale;
+      for (auto& w : mw.weights) {
+        for (float& v : w) v = static_cast<float>(Weight(model.kernel, v, width));
+      }
     }
-    out.final_rms_px = std::sqrt(sum_sq / out.equations);
-    if (pass + 1 == solves) break;
-    // The median of |r| from an even spread of at most kScaleSamples residuals: the scale
-    // needs a few per cent accuracy, and the selection is the solve's costliest part.
-    constexpr size_t kScaleSamples = 1024;
-    const size_t stride = (abs_residuals.size() + kScaleSamples - 1) / kScaleSamples;
-    size_t kept = 0;
-    for (size_t i = 0; i < abs_residuals.size(); i += stride)
-      abs_residuals[kept++] = abs_residuals[i];
-    const size_t mid = kept / 2;
-    std::nth_element(abs_residuals.begin(), abs_residuals.begin() + mid,
-                     abs_residuals.begin() + kept);
-    const double scale = std::max(1.4826 * abs_residuals[mid], options.min_scale_px);
-    out.robust_scale_px = scale;
-    const double width = options.kernel_width * scale;
-    for (auto& w : weights) {
-      for (float& v : w) v = static_cast<float>(Weight(options.kernel, v, width));
-    }
+    if (pass + 1 == solves) out.ok = true;
   }
-  out.ok = true;
-  out.twist = twist;
+  for (ModalityWork& mw : work) mw.stats.noise = mw.noise;
+  finish_stats();
+  if (out.ok) out.twist = twist;
   return out;
+}
+
+FlowSolution SolveFlow(const std::vector<FlowEquations>& cameras,
+                       const FlowSolverOptions& options) {
+  ModalityEquations photometric;
+  photometric.name = "photometric";
+  photometric.model.kernel = options.kernel;
+  photometric.model.kernel_width = options.kernel_width;
+  photometric.model.min_scale = options.min_scale_px;
+  photometric.cameras = cameras;
+  return SolveJoint({&photometric}, options);
 }
 
 }  // namespace unseen

@@ -51,19 +51,65 @@ struct FlowEquations {
   }
 };
 
+// How the residuals of one modality are judged and weighed against the others. The
+// normalized residual of row i is r_i = (a_i . x - b_i) * inv_norm_i (pixels of normal flow
+// for the photometric rows, metres for depth, ...); the robust kernel acts on r_i divided by
+// its robust scale (1.4826 MAD, floored at min_scale). The whole modality is weighed by
+// weight / noise^2, where noise is the robust scale of its residuals in the rows' own units
+// (1.4826 MAD, floored at min_noise): each modality counts by its measured noise, and a
+// modality alone gets the same solution whatever its weight.
+struct ResidualModel {
+  RobustKernel kernel = RobustKernel::kHuber;
+  double kernel_width = 1.345;  // in robust scales
+  double min_scale = 0.05;      // floor of the robust scale, normalized units
+  double min_noise = 1e-4;      // floor of the noise, row units
+  double weight = 1.0;          // multiplies 1 / noise^2
+  void Check(const std::string& what) const;
+};
+
+// One modality's equations over all cameras of the rig (index = rig camera).
+struct ModalityEquations {
+  std::string name;  // "photometric", "depth", ... (reports)
+  ResidualModel model;
+  std::vector<FlowEquations> cameras;
+  int size() const;
+  void Clear();  // keeps the cameras and their capacity
+};
+
+// What the solve saw of one modality.
+struct ModalityStats {
+  int equations = 0;
+  double initial_rms = 0.0;   // RMS normalized residual before the update
+  double final_rms = 0.0;     // RMS normalized residual of the linear model after it
+  double robust_scale = 0.0;  // last robust scale, normalized units
+  double noise = 0.0;         // last noise, row units (what weighed the modality)
+};
+
 struct FlowSolution {
   bool ok = false;             // false: too few equations or a singular system
   Vector6d twist = Vector6d::Zero();  // (v [m], w [rad]), world frame, about the origin
-  int equations = 0;
-  double initial_rms_px = 0.0;  // RMS normal-flow residual |It| / |grad| before the update
-  double final_rms_px = 0.0;    // RMS normalized residual of the linear model after it
-  double robust_scale_px = 0.0; // last robust residual scale
+  int equations = 0;           // over all modalities
+  // The first modality's (the photometric one's in the tracker): RMS normal-flow residual
+  // |It| / |grad| before the update, RMS normalized residual after it, robust scale.
+  double initial_rms_px = 0.0;
+  double final_rms_px = 0.0;
+  double robust_scale_px = 0.0;
   double min_eigenvalue = 0.0;  // smallest eigenvalue of the normal matrix (conditioning)
+  std::vector<ModalityStats> modalities;  // in the order given
 };
 
 // Accumulates the 6x6 normal equations of all cameras (float rows, double sums), turns
 // each camera's block into the world frame and solves by LDLT; then `irls_iterations`
-// re-weighted solves. Cameras with no rows are skipped.
+// re-weighted solves. Cameras with no rows are skipped. The photometric rows alone, with
+// the kernel of `options`.
 FlowSolution SolveFlow(const std::vector<FlowEquations>& cameras, const FlowSolverOptions& options);
+
+// One Gauss-Newton step over several modalities: each modality's normal equations, re-weighted
+// by its own kernel and scale, weighed by weight / noise^2 (ResidualModel) and summed over
+// modalities and cameras. `options` gives irls_iterations, min_equations (over all
+// modalities) and damping; its kernel fields are not used. Null or empty modalities count as
+// having no equations (their stats stay zero).
+FlowSolution SolveJoint(const std::vector<const ModalityEquations*>& modalities,
+                        const FlowSolverOptions& options);
 
 }  // namespace unseen

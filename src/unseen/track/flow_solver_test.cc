@@ -104,6 +104,57 @@ TEST(FlowSolver, TooFewEquationsIsNotOk) {
   EXPECT_FALSE(SolveFlow({}, FlowSolverOptions()).ok);
 }
 
+TEST(FlowSolver, AModalityAloneSolvesTheSameWhateverItsWeight) {
+  std::mt19937 rng(11);
+  Vector6d twist;
+  twist << 0.002, 0.001, -0.003, 0.01, 0.0, -0.02;
+  ModalityEquations m;
+  m.cameras = {MakeEquations(Camera(), Rigid3d(), Eigen::Vector3d(0, 0, 1), twist, 800, 80, &rng)};
+  FlowSolverOptions options;
+  const FlowSolution a = SolveJoint({&m}, options);
+  m.model.weight = 1000.0;
+  const FlowSolution b = SolveJoint({&m}, options);
+  ASSERT_TRUE(a.ok && b.ok);
+  EXPECT_LT((a.twist - b.twist).norm(), 1e-6 * twist.norm());
+  ASSERT_EQ(a.modalities.size(), 1u);
+  EXPECT_EQ(a.modalities[0].equations, 800);
+  EXPECT_GT(a.modalities[0].noise, 0.0);
+}
+
+TEST(FlowSolver, ModalitiesAreWeighedByTheirNoise) {
+  // Two modalities of the same motion, one 100x noisier: weighed by their measured noise,
+  // the joint solution is about as good as the precise one alone; weighed alike, the noisy
+  // one spoils it.
+  std::mt19937 rng(13);
+  Vector6d truth;
+  truth << 0.002, 0.001, -0.003, 0.01, 0.0, -0.02;
+  ModalityEquations precise, noisy;
+  precise.cameras = {
+      MakeEquations(Camera(), Rigid3d(), Eigen::Vector3d(0, 0, 1), truth, 600, 0, &rng)};
+  noisy.cameras = {
+      MakeEquations(Camera(), Rigid3d(), Eigen::Vector3d(0, 0, 1), truth, 600, 0, &rng)};
+  std::normal_distribution<float> small(0.0f, 1e-4f), large(0.0f, 1e-2f);
+  for (float& b : precise.cameras[0].rhs) b += small(rng);
+  for (float& b : noisy.cameras[0].rhs) b += large(rng);
+  precise.model.min_noise = noisy.model.min_noise = 1e-6;
+  FlowSolverOptions options;
+  options.damping = 0.0;
+  const double alone = (SolveJoint({&precise}, options).twist - truth).norm();
+  const FlowSolution s = SolveJoint({&noisy, &precise}, options);
+  ASSERT_TRUE(s.ok);
+  const double joint = (s.twist - truth).norm();
+  ASSERT_EQ(s.modalities.size(), 2u);
+  EXPECT_GT(s.modalities[0].noise, 10.0 * s.modalities[1].noise);
+  precise.model.min_noise = noisy.model.min_noise = 1.0;  // both weighed 1 / 1^2
+  const double alike = (SolveJoint({&noisy, &precise}, options).twist - truth).norm();
+  EXPECT_LT(joint, 2.0 * alone) << joint << " vs " << alone;
+  EXPECT_LT(joint, 0.3 * alike) << joint << " vs " << alike;
+  // A modality with no equations is skipped; none at all is no solution.
+  ModalityEquations empty;
+  EXPECT_TRUE(SolveJoint({&precise, &empty, nullptr}, options).ok);
+  EXPECT_FALSE(SolveJoint({&empty}, options).ok);
+}
+
 TEST(FlowSolver, OptionsCheck) {
   FlowSolverOptions o;
   EXPECT_NO_THROW(o.Check());
