@@ -96,7 +96,7 @@ RunOutcome Execute(const Run& run, int max_frames) {
     const Frame frame = sequence.ReadFrame(i);
     const std::clock_t cpu_start = std::clock();
     Timer timer;
-    const TrackResult result = tracker.Track(frame.images);
+    const TrackResult result = tracker.Track(frame);
     const double seconds = timer.ElapsedSeconds();
     cpu_ticks += std::clock() - cpu_start;
     track_seconds += seconds;

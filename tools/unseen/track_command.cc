@@ -151,7 +151,7 @@ void RunTrack(const TrackArgs& args) {
     const Frame frame = next.get();
     if (i + 1 < frames) next = read(i + 1);
     Timer timer;
-    const TrackResult r = tracker.Track(frame.images);
+    const TrackResult r = tracker.Track(frame);
     const double ms = timer.ElapsedMilliseconds();
     sum_process_ms += ms;
     sum_times += r.summary.times;

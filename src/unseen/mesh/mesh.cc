@@ -15,6 +15,24 @@ bool Mesh::HasUvTexture() const {
                      [](const Material& m) { return !m.texture.empty(); });
 }
 
+bool Mesh::HasAppearance() const {
+  if (HasUvTexture() || !projectors.empty()) return true;
+  constexpr float kSameColour = 2.0f / 255.0f;
+  auto varies = [&](const std::vector<Eigen::Vector3f>& colours) {
+    for (const Eigen::Vector3f& c : colours) {
+      if ((c - colours.front()).cwiseAbs().maxCoeff() > kSameColour) return true;
+    }
+    return false;
+  };
+  if (!colors_bgr.empty() && varies(colors_bgr)) return true;
+  if (materials.size() > 1 && !triangle_materials.empty()) {
+    std::vector<Eigen::Vector3f> used;
+    for (int m : triangle_materials) used.push_back(materials[m].diffuse_bgr);
+    return varies(used);
+  }
+  return false;
+}
+
 void Mesh::Check(const std::string& what) const {
   UNSEEN_CHECK(!triangles.empty(), "{}: mesh has no triangles", what);
   UNSEEN_CHECK(!vertices.empty(), "{}: mesh has no vertices", what);

@@ -46,6 +46,10 @@ struct Mesh {
   int num_vertices() const { return static_cast<int>(vertices.size()); }
   int num_triangles() const { return static_cast<int>(triangles.size()); }
   bool HasUvTexture() const;
+  // True when the surface's colour varies: a UV texture, projective textures, vertex
+  // colours that differ, or materials of different diffuse colours. A mesh without
+  // appearance renders in one flat colour.
+  bool HasAppearance() const;
 
   // Throws unseen::Error naming `what` for: no triangles, non-finite vertices, indices out
   // of range, attribute arrays whose size does not match, material ids out of range.

@@ -392,6 +392,9 @@ Tracker& Reacquisition::CoarseTracker(int level) {
     o.reacquisition.use_correlation = false;
     o.reacquisition.seed_when_doubtful = false;
     o.threads = 1;  // small images; no pool of its own
+    // The colour statistics are the tracker's, learnt from tracked frames; a clone would
+    // learn them from its candidates.
+    o.region.enabled = false;
     slot = std::make_unique<Tracker>(rig, tracker_.model(), o);
   }
   return *slot;
@@ -423,8 +426,9 @@ TrackResult Reacquisition::ScoreCoarse(const std::vector<cv::Mat>& images,
   return AlignCoarse(Downsampled(images, finest), finest, levels - finest, start);
 }
 
-TrackResult Reacquisition::Search(const std::vector<cv::Mat>& images, const Rigid3d& last_good,
+TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
                                   TrackResult first) {
+  const std::vector<cv::Mat>& images = frame.images;
   const TrackerOptions& options = tracker_.options();
   const ReacquisitionOptions& o = options.reacquisition;
   StageTimes times = first.summary.times;
@@ -500,7 +504,7 @@ TrackResult Reacquisition::Search(const std::vector<cv::Mat>& images, const Rigi
   for (int k = 0; k < static_cast<int>(scored.size()) && k < o.refine_candidates; ++k) {
     if (best.confidence >= options.failure.recover_confidence) break;
     if (scored[k].score < o.min_score) break;
-    TrackResult r = tracker_.Align(images, scored[k].pose);
+    TrackResult r = tracker_.Align(frame, scored[k].pose);
     times += r.summary.times;
     UNSEEN_LOG_DEBUG("refined candidate {}: conf {:.2f} at {}", scored[k].order, r.confidence,
                      r.world_from_obj.ToString());
@@ -511,8 +515,9 @@ TrackResult Reacquisition::Search(const std::vector<cv::Mat>& images, const Rigi
   return best;
 }
 
-TrackResult Reacquisition::Seed(const std::vector<cv::Mat>& images, const Rigid3d& predicted,
-                                TrackResult first, bool* from_seed) {
+TrackResult Reacquisition::Seed(const Frame& frame, const Rigid3d& predicted, TrackResult first,
+                                bool* from_seed) {
+  const std::vector<cv::Mat>& images = frame.images;
   const TrackerOptions& options = tracker_.options();
   const ReacquisitionOptions& o = options.reacquisition;
   *from_seed = false;
@@ -525,7 +530,7 @@ TrackResult Reacquisition::Seed(const std::vector<cv::Mat>& images, const Rigid3
   times.preprocess_ms += timer.ElapsedMilliseconds();
   TrackResult best = std::move(first);
   if (!seeds.empty() && seeds[0].max_shift_px >= o.min_seed_shift_px) {
-    TrackResult r = tracker_.Align(images, seeds[0].world_from_obj);
+    TrackResult r = tracker_.Align(frame, seeds[0].world_from_obj);
     times += r.summary.times;
     UNSEEN_LOG_DEBUG("correlation seed: shift {:.1f} px at level {}, ncc {:.2f}: conf {:.2f} "
                      "(first {:.2f})",

@@ -104,19 +104,20 @@ class Reacquisition {
   explicit Reacquisition(Tracker* tracker);
   ~Reacquisition();
 
+  // `frame` is checked (Tracker::CheckFrame); its depth, if any, serves the full-resolution
+  // alignments.
   // While lost: `first` is the full alignment from `last_good`. Correlates `last_good`
   // and its turns, scores the candidates at the coarse levels (successive halving down to
   // level 1), aligns the best options.refine_candidates at full resolution (stopping once
   // one reaches failure.recover_confidence) and returns the most confident of everything
   // aligned at full resolution (summary.search_candidates = poses tried, times summed).
-  TrackResult Search(const std::vector<cv::Mat>& images, const Rigid3d& last_good,
-                     TrackResult first);
+  TrackResult Search(const Frame& frame, const Rigid3d& last_good, TrackResult first);
   // While tracking, for a doubtful frame: `first` is the full alignment from `predicted`.
   // Aligns from the correlation seed around `predicted` when it moves the object, and
   // returns that alignment when it is at least failure.recover_confidence and more
   // confident than `first` (`*from_seed` then true), else `first`.
-  TrackResult Seed(const std::vector<cv::Mat>& images, const Rigid3d& predicted,
-                   TrackResult first, bool* from_seed);
+  TrackResult Seed(const Frame& frame, const Rigid3d& predicted, TrackResult first,
+                   bool* from_seed);
 
   // The alignment of `start` at the coarsest options.score_levels levels of the pyramid
   // the tracker would use at `start`, the confidence from the finest of those levels

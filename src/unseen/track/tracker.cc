@@ -52,7 +52,7 @@ std::string SolveSummary::BriefReport() const {
   return fmt::format(
       "levels {} iters {} renders {} | px cand {} grad- {} occ- {}/{}/{} undir- {} flow- {} "
       "block- {} used {} (share {:.2f} block {:.2f}) | res {:.3f}->{:.3f} px, last upd {:.3f} "
-      "px, corr {:.1f} px{} | ms pred {:.3f} rend {:.3f} pre {:.3f} sel {:.3f} solve {:.3f} "
+      "px, corr {:.1f} px{}{}{} | ms pred {:.3f} rend {:.3f} pre {:.3f} sel {:.3f} solve {:.3f} "
       "total {:.3f}",
       num_levels, iters, renders, counts.candidates, counts.rejected_gradient,
       counts.rejected_input_gradient, counts.rejected_direction, counts.rejected_magnitude,
@@ -60,6 +60,15 @@ std::string SolveSummary::BriefReport() const {
       share, counts.BlockShare(),
       initial_residual_px, final_residual_px, last_update_px, correction_px,
       search_candidates ? fmt::format(", searched {}", search_candidates) : std::string(),
+      depth_counts.sampled
+          ? fmt::format(" | depth used {} agree {}/{} hidden {} res {:.1f} mm", depth_counts.used,
+                        depth_counts.agreeing, depth_counts.measured, depth_counts.hidden,
+                        1e3 * depth_residual_m)
+          : std::string(),
+      region_counts.lines
+          ? fmt::format(" | region lines {} used {} agree {:.2f} res {:.2f}", region_counts.lines,
+                        region_counts.used, region_counts.Agreement(), region_residual)
+          : std::string(),
       times.predict_ms, times.render_ms, times.preprocess_ms, times.select_ms, times.solve_ms,
       times.total_ms);
 }
@@ -105,6 +114,7 @@ Tracker::Tracker(const Rig& rig, Mesh model, const TrackerOptions& options)
   for (const RigCamera& c : rig_.cameras) {
     cam_from_world_.push_back(c.cam_from_world());
     work_.push_back(std::make_unique<CameraWork>());
+    histograms_.emplace_back(options_.region.bins_per_channel);
   }
   predictor_ = MakeMotionPredictor(options_.predictor);
   if (options_.threads != 1) pool_ = std::make_unique<ThreadPool>(options_.threads);
@@ -141,8 +151,15 @@ void Tracker::SetModel(Mesh model) {
     box_corners_[k] = Eigen::Vector3d(k & 1 ? hi.x() : lo.x(), k & 2 ? hi.y() : lo.y(),
                                       k & 4 ? hi.z() : lo.z());
   }
+  const PhotometricOptions& po = options_.photometric;
+  use_photometric_ = po.enabled && (!po.require_appearance || model.HasAppearance() ||
+                                    !options_.region.enabled);
   model_ = std::make_shared<const Mesh>(std::move(model));
   reacquisition_.reset();
+  // What was learnt about the old model's appearance does not hold for the new one; the
+  // next frame learns it again from its start.
+  for (ColorHistograms& h : histograms_) h.Reset();
+  learn_from_start_ = true;
 }
 
 Reacquisition& Tracker::Reacquirer() {
@@ -173,6 +190,8 @@ void Tracker::Initialize(const Rigid3d& world_from_obj) {
   bad_frames_ = 0;
   recent_correction_px_ = std::numeric_limits<double>::infinity();
   residual_reference_px_ = 0.0;
+  for (ColorHistograms& h : histograms_) h.Reset();
+  learn_from_start_ = true;
   initialized_ = true;
 }
 
@@ -210,10 +229,17 @@ double Tracker::UpdatePixels(const Rigid3d& world_from_obj, const Vector6d& twis
   return px;
 }
 
-std::vector<cv::Mat> Tracker::CheckImages(const std::vector<cv::Mat>& images) const {
+Frame Tracker::CheckFrame(const Frame& frame) const {
+  const std::vector<cv::Mat>& images = frame.images;
   UNSEEN_CHECK(static_cast<int>(images.size()) == rig_.size(),
                "Tracker::Track: got {} images for a rig of {} cameras", images.size(), rig_.size());
-  std::vector<cv::Mat> out(images.size());
+  UNSEEN_CHECK(frame.depths.empty() || static_cast<int>(frame.depths.size()) == rig_.size(),
+               "Tracker::Track: got {} depth images for a rig of {} cameras", frame.depths.size(),
+               rig_.size());
+  Frame out;
+  out.frame_id = frame.frame_id;
+  out.time_s = frame.time_s;
+  out.images.resize(images.size());
   for (size_t c = 0; c < images.size(); ++c) {
     const cv::Mat& im = images[c];
     const PinholeCamera& cam = rig_.cameras[c].intrinsics;
@@ -223,20 +249,36 @@ std::vector<cv::Mat> Tracker::CheckImages(const std::vector<cv::Mat>& images) co
                  "Tracker::Track: image of camera '{}' is {}x{}, the camera is {}x{}", name, im.cols,
                  im.rows, cam.width, cam.height);
     if (im.type() == CV_32FC3) {
-      out[c] = im;
+      out.images[c] = im;
     } else {
       UNSEEN_CHECK(im.type() == CV_8UC3,
                    "Tracker::Track: image of camera '{}' has type {}; expected CV_32FC3 or CV_8UC3",
                    name, im.type());
-      out[c] = ToFloatBgr(im, "camera '" + name + "' image");
+      out.images[c] = ToFloatBgr(im, "camera '" + name + "' image");
     }
   }
+  if (!options_.depth.enabled) return out;
+  bool any_depth = false;
+  for (size_t c = 0; c < frame.depths.size(); ++c) {
+    const cv::Mat& d = frame.depths[c];
+    if (d.empty()) continue;
+    const PinholeCamera& cam = rig_.cameras[c].intrinsics;
+    const std::string& name = rig_.cameras[c].name;
+    UNSEEN_CHECK(d.type() == CV_32FC1,
+                 "Tracker::Track: depth of camera '{}' has type {}; expected CV_32FC1 metres", name,
+                 d.type());
+    UNSEEN_CHECK(d.cols == cam.width && d.rows == cam.height,
+                 "Tracker::Track: depth of camera '{}' is {}x{}, the camera is {}x{}", name, d.cols,
+                 d.rows, cam.width, cam.height);
+    any_depth = true;
+  }
+  if (any_depth) out.depths = frame.depths;
   return out;
 }
 
 double Tracker::Confidence(const SolveSummary& s) const {
   const FailureOptions& f = options_.failure;
-  if (s.equations < f.min_pixels || s.counts.gradient_pixels() <= 0) return 0.0;
+  if (s.equations < f.min_pixels) return 0.0;
   const double support_term = std::max(Ramp(s.share, f.min_share, f.good_share),
                                        Ramp(double(s.counts.used), f.min_used_px, f.good_used_px));
   double residual_term = Ramp(s.initial_residual_px, f.bad_residual_px, f.good_residual_px);
@@ -246,17 +288,37 @@ double Tracker::Confidence(const SolveSummary& s) const {
                           f.good_residual_ratio);
   }
   const double update_term = Ramp(s.last_update_px, f.bad_update_px, f.good_update_px);
-  return support_term * residual_term * update_term;
+  const double photometric = support_term * residual_term * update_term;
+  // The silhouette judges the frame of a model without appearance; with measured depth to
+  // guard it, it also vouches for a frame whose texture says little (motion blur). Measured
+  // depth, when there is some, must agree in every case.
+  double region_term = 0.0;
+  const double region_agreement = s.region_counts.Agreement();
+  if (region_agreement >= 0.0 && s.region_counts.used >= f.min_region_lines) {
+    region_term =
+        Ramp(region_agreement, options_.region.bad_agreement, options_.region.good_agreement);
+  }
+  const double depth_agreement = s.depth_counts.Agreement(options_.depth);
+  if (depth_agreement < 0.0) return use_photometric_ ? photometric : region_term;
+  const double depth_term =
+      Ramp(depth_agreement, options_.depth.bad_agreement, options_.depth.good_agreement);
+  return depth_term * std::max(photometric, region_term);
 }
 
 TrackResult Tracker::Align(const std::vector<cv::Mat>& images, const Rigid3d& world_from_obj,
                            int num_levels) {
+  Frame frame;
+  frame.images = images;
+  return Align(frame, world_from_obj, num_levels);
+}
+
+TrackResult Tracker::Align(const Frame& frame, const Rigid3d& world_from_obj, int num_levels) {
   UNSEEN_CHECK(world_from_obj.IsValid(), "Tracker::Align: start pose {} is not valid",
                world_from_obj.ToString());
   UNSEEN_CHECK(num_levels >= 0 && num_levels <= 8, "Tracker::Align: num_levels {} not in [0, 8]",
                num_levels);
   Timer total;
-  TrackResult r = AlignChecked(CheckImages(images), world_from_obj, num_levels);
+  TrackResult r = AlignChecked(CheckFrame(frame), world_from_obj, num_levels);
   r.summary.times.total_ms = total.ElapsedMilliseconds();
   return r;
 }
@@ -459,7 +521,9 @@ bool Tracker::PrepareVirtual(const Rigid3d& cam_from_obj, int level, ThreadPool*
     return false;
   }
   Timer timer;
-  Preprocess(w.composite, options_.preprocess, level, true, &w.virtual_pre);
+  if (use_photometric_) {
+    Preprocess(w.composite, options_.preprocess, level, true, &w.virtual_pre);
+  }
   // Mask and its blurred rim; depth of the rim from the nearest surface.
   if (po.rim_px > 0) {
     const cv::Mat rim_kernel =
@@ -479,8 +543,8 @@ bool Tracker::PrepareVirtual(const Rigid3d& cam_from_obj, int level, ThreadPool*
   return true;
 }
 
-TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigid3d& start,
-                                  int num_levels) {
+TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int num_levels) {
+  const std::vector<cv::Mat>& images = frame.images;
   const PyramidOptions& po = options_.pyramid;
   const int ncam = rig_.size();
   TrackResult result;
@@ -491,9 +555,24 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
       static_cast<int>(std::ceil(3.0 * options_.preprocess.blur_sigma_px)) + po.rim_px + 2;
   const bool input_gradients = options_.selection.use_occlusion_rejection;
   // Reused from frame to frame, so that the equations keep their capacity.
-  std::vector<FlowEquations>& equations = equations_;
-  equations.resize(ncam);
+  photometric_.name = "photometric";
+  photometric_.model.kernel = options_.solver.kernel;
+  photometric_.model.kernel_width = options_.solver.kernel_width;
+  photometric_.model.min_scale = options_.solver.min_scale_px;
+  photometric_.model.weight = options_.photometric.weight;
+  photometric_.cameras.resize(ncam);
+  depth_.name = "depth";
+  depth_.model = options_.depth.residual;
+  depth_.cameras.resize(ncam);
+  region_.name = "region";
+  region_.model = options_.region.residual;
+  region_.cameras.resize(ncam);
+  for (ColorHistograms& h : histograms_) h.DiscardPending();
+  std::vector<RegionCounts> camera_region_counts(ncam);
+  std::vector<FlowEquations>& equations = photometric_.cameras;
+  const bool use_depth = !frame.depths.empty();
   std::vector<SelectionCounts> camera_counts(ncam);
+  std::vector<DepthCounts> camera_depth_counts(ncam);
   std::vector<int> jobs;  // c: camera c's virtual image; ncam + c: its input
   for (auto& w : work_) {
     w->times = StageTimes();
@@ -559,7 +638,9 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
       for (int c = 0; c < ncam; ++c) {
         if (!work_[c]->active) continue;
         jobs.push_back(c);                                   // virtual image
-        if (work_[c]->input_stale) jobs.push_back(ncam + c);  // input
+        if (work_[c]->input_stale && use_photometric_) {
+          jobs.push_back(ncam + c);  // input
+        }
       }
       const int num_jobs = static_cast<int>(jobs.size());
       ThreadPool* render_pool = num_jobs == 1 ? pool_.get() : nullptr;
@@ -579,7 +660,11 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
       RunParallel(ncam, [&](int c) {
         CameraWork& w = *work_[c];
         equations[c].Clear();
+        depth_.cameras[c].Clear();
+        region_.cameras[c].Clear();
+        camera_region_counts[c] = RegionCounts();
         camera_counts[c] = SelectionCounts();
+        camera_depth_counts[c] = DepthCounts();
         if (!w.active || !w.virtual_ok) return;
         Timer select_timer;
         SelectionInput in;
@@ -591,15 +676,62 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
         in.camera = w.camera;
         in.origin_in_cam = (cam_from_world_[c] * round_pose).translation();
         equations[c].world_from_cam_rotation = rig_.cameras[c].world_from_cam.RotationMatrix();
-        SelectPixels(in, options_.selection, &equations[c], &camera_counts[c]);
+        if (use_photometric_) {
+          SelectPixels(in, options_.selection, &equations[c], &camera_counts[c]);
+        }
+        if (use_depth && !frame.depths[c].empty()) {
+          DepthModalityInput din;
+          din.rendered_depth = &w.depth;
+          din.roi = w.roi;
+          din.level_camera = w.camera;
+          din.level = level;
+          din.measured_depth = &frame.depths[c];
+          din.camera = rig_.cameras[c].intrinsics;
+          din.origin_in_cam = in.origin_in_cam;
+          depth_.cameras[c].world_from_cam_rotation = equations[c].world_from_cam_rotation;
+          AddDepthEquations(din, options_.depth, &depth_.cameras[c], &camera_depth_counts[c]);
+        }
+        if (options_.region.enabled) {
+          RegionModalityInput rin;
+          rin.image = &w.input_roi;
+          rin.mask = &w.mask;
+          rin.rendered_depth = &w.depth;
+          if (level < options_.pyramid.supersampled_levels) rin.coverage = &w.coverage;
+          rin.roi = w.roi;
+          rin.camera = w.camera;
+          rin.origin_in_cam = in.origin_in_cam;
+          rin.level = level;
+          region_.cameras[c].world_from_cam_rotation = equations[c].world_from_cam_rotation;
+          ColorHistograms& h = histograms_[c];
+          // The level-0 rounds teach the statistics (committed by Track() for a confident
+          // frame); the first frame after Initialize() learns at once from the given pose.
+          const bool first = !h.learnt() && learn_from_start_;
+          AddRegionEquations(rin, options_.region, level == 0 || first, &h, &region_.cameras[c],
+                             &camera_region_counts[c]);
+          if (first) {
+            h.Commit(1.0);
+            if (h.learnt()) {
+              AddRegionEquations(rin, options_.region, false, &h, &region_.cameras[c],
+                                 &camera_region_counts[c]);
+            }
+          }
+        }
         w.times.select_ms += select_timer.ElapsedMilliseconds();
       });
       counts = SelectionCounts();
       for (const SelectionCounts& b : camera_counts) counts += b;
 
       timer.Restart();
-      const FlowSolution solution = SolveFlow(equations, options_.solver);
+      const FlowSolution solution =
+          SolveJoint({&photometric_, &depth_, &region_}, options_.solver);
       if (level == 0) {
+        s.depth_counts = DepthCounts();
+        for (const DepthCounts& d : camera_depth_counts) s.depth_counts += d;
+        s.depth_equations = solution.modalities[1].equations;
+        s.depth_residual_m = solution.modalities[1].initial_rms;
+        s.region_counts = RegionCounts();
+        for (const RegionCounts& rc : camera_region_counts) s.region_counts += rc;
+        s.region_residual = solution.modalities[2].initial_rms;
         s.counts = counts;
         s.equations = solution.equations;
         s.initial_residual_px = solution.initial_rms_px;
@@ -642,8 +774,7 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
   return result;
 }
 
-TrackResult Tracker::AlignPredicted(const std::vector<cv::Mat>& images,
-                                    const Rigid3d& predicted) {
+TrackResult Tracker::AlignPredicted(const Frame& frame, const Rigid3d& predicted) {
   const PyramidOptions& po = options_.pyramid;
   const double trust = options_.reacquisition.doubtful_confidence;
   const int full = NumLevelsFor(predicted);
@@ -654,10 +785,10 @@ TrackResult Tracker::AlignPredicted(const std::vector<cv::Mat>& images,
     levels = std::min(full, po.min_adaptive_levels);
     while (levels < full && expected_px > po.capture_px * double(1 << (levels - 1))) ++levels;
   }
-  TrackResult r = AlignChecked(images, predicted, levels);
+  TrackResult r = AlignChecked(frame, predicted, levels);
   const double reach_px = po.capture_px * double(1 << (levels - 1));
   if (levels < full && (r.confidence < trust || r.summary.correction_px > 0.75 * reach_px)) {
-    TrackResult with_all = AlignChecked(images, predicted, full);
+    TrackResult with_all = AlignChecked(frame, predicted, full);
     StageTimes both = r.summary.times;  // both alignments were paid for
     both += with_all.summary.times;
     if (with_all.confidence >= r.confidence) r = std::move(with_all);
@@ -675,9 +806,15 @@ TrackResult Tracker::AlignPredicted(const std::vector<cv::Mat>& images,
 }
 
 TrackResult Tracker::Track(const std::vector<cv::Mat>& images_per_camera) {
+  Frame frame;
+  frame.images = images_per_camera;
+  return Track(frame);
+}
+
+TrackResult Tracker::Track(const Frame& input_frame) {
   UNSEEN_CHECK(initialized_, "Tracker::Track called before Initialize()");
   Timer total;
-  const std::vector<cv::Mat> images = CheckImages(images_per_camera);
+  const Frame frame = CheckFrame(input_frame);
   const FailureOptions& f = options_.failure;
 
   Timer timer;
@@ -685,18 +822,19 @@ TrackResult Tracker::Track(const std::vector<cv::Mat>& images_per_camera) {
       status_ == TrackStatus::kLost ? last_good_ : predictor_->Predict(options_.frame_interval_s);
   const double predict_ms = timer.ElapsedMilliseconds();
 
-  TrackResult r = AlignPredicted(images, predicted);
+  TrackResult r = AlignPredicted(frame, predicted);
+  learn_from_start_ = false;
   if (status_ == TrackStatus::kLost && f.search_when_lost && r.confidence < f.recover_confidence) {
     // Re-acquisition (3.9): correlation seeds, translations and rotations around the last
     // good pose, scored at the coarse levels, the best refined.
-    r = Reacquirer().Search(images, last_good_, std::move(r));
+    r = Reacquirer().Search(frame, last_good_, std::move(r));
   } else if (status_ == TrackStatus::kTracking && options_.reacquisition.seed_when_doubtful &&
              r.confidence < options_.reacquisition.doubtful_confidence) {
     // A doubtful frame may have moved beyond the pyramid's capture range: try the
     // correlation seed before judging it. The motion model did not bring the object
     // where the seed found it: it restarts there rather than learning the jump.
     bool from_seed = false;
-    r = Reacquirer().Seed(images, predicted, std::move(r), &from_seed);
+    r = Reacquirer().Seed(frame, predicted, std::move(r), &from_seed);
     if (from_seed) predictor_->Reset(r.world_from_obj);
   }
 
@@ -728,6 +866,17 @@ TrackResult Tracker::Track(const std::vector<cv::Mat>& images_per_camera) {
       residual_reference_px_ = residual;
     } else if (residual < f.good_residual_ratio * residual_reference_px_) {
       residual_reference_px_ += f.residual_reference_rate * (residual - residual_reference_px_);
+    }
+  }
+  // The colour statistics learn from frames tracked with confidence by a plain alignment
+  // (a search's result may come from another candidate than the last one aligned).
+  const bool teach = status_ == TrackStatus::kTracking && r.confidence >= f.recover_confidence &&
+                     r.summary.search_candidates == 0;
+  for (ColorHistograms& h : histograms_) {
+    if (teach) {
+      h.Commit(options_.region.learn_rate);
+    } else {
+      h.DiscardPending();
     }
   }
   r.status = status_;

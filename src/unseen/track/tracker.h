@@ -22,9 +22,13 @@
 
 #include "unseen/camera/camera.h"
 #include "unseen/geometry/rigid3.h"
+#include "unseen/io/sequence.h"
 #include "unseen/io/pose_stream.h"
 #include "unseen/mesh/mesh.h"
 #include "unseen/render/rasterizer.h"
+#include "unseen/track/depth_modality.h"
+#include "unseen/track/region_modality.h"
+#include "unseen/track/flow_solver.h"
 #include "unseen/track/motion_predictor.h"
 #include "unseen/track/pixel_selection.h"
 #include "unseen/track/preprocess.h"
@@ -54,6 +58,15 @@ struct SolveSummary {
   double last_update_px = 0.0;           // image motion of that last update, px
   double correction_px = 0.0;            // image motion of the whole correction this frame
   double share = 0.0;                    // counts.used / counts.gradient_pixels()
+  // The depth modality in that round (all zero without depth): its points and the RMS of
+  // their point-to-plane distances before the update, metres.
+  DepthCounts depth_counts;
+  int depth_equations = 0;
+  double depth_residual_m = 0.0;
+  // The region modality in that round: its lines and the RMS contour offset before the
+  // update, standard deviations.
+  RegionCounts region_counts;
+  double region_residual = 0.0;
   int search_candidates = 0;             // poses tried by the re-acquisition search
   StageTimes times;
   // One line: levels, iterations, pixels used/rejected, residual, ms.
@@ -87,14 +100,19 @@ class Tracker {
   void Reset(const Rigid3d& world_from_obj) { Initialize(world_from_obj); }
 
   // Tracks one synchronized frame: one image per rig camera, in rig order, CV_32FC3 BGR in
-  // [0, 1] (CV_8UC3 is converted) of that camera's size. Throws unseen::Error before
-  // Initialize(), for a wrong number of images or a wrong size/type. An object out of view
-  // is reported as lost, never as NaN.
+  // [0, 1] (CV_8UC3 is converted) of that camera's size, and optionally one depth image
+  // per camera (Frame::depths: CV_32FC1 metres, 0 = no measurement, of that camera's size;
+  // an empty Mat for a camera without depth), which the depth modality uses
+  // (TrackerOptions::depth). Throws unseen::Error before Initialize(), for a wrong number
+  // of images or a wrong size/type. An object out of view is reported as lost, never as NaN.
+  TrackResult Track(const Frame& frame);
+  // The same for colour images alone.
   TrackResult Track(const std::vector<cv::Mat>& images_per_camera);
 
   // Aligns the model to the frame starting from `world_from_obj` without touching the
   // tracking state (no prediction, no status): the multi-scale render-solve loop and the
   // confidence. `num_levels` > 0 overrides the automatic pyramid depth.
+  TrackResult Align(const Frame& frame, const Rigid3d& world_from_obj, int num_levels = 0);
   TrackResult Align(const std::vector<cv::Mat>& images_per_camera, const Rigid3d& world_from_obj,
                     int num_levels = 0);
 
@@ -110,12 +128,12 @@ class Tracker {
 
  private:
   struct CameraWork;
-  std::vector<cv::Mat> CheckImages(const std::vector<cv::Mat>& images) const;
-  TrackResult AlignChecked(const std::vector<cv::Mat>& images, const Rigid3d& start,
-                           int num_levels);
+  // The frame with colour converted to CV_32FC3 and every image checked against its camera.
+  Frame CheckFrame(const Frame& frame) const;
+  TrackResult AlignChecked(const Frame& frame, const Rigid3d& start, int num_levels);
   // The alignment of a frame from the predicted pose, with the pyramid depth the recent
   // corrections call for (PyramidOptions::adaptive_levels).
-  TrackResult AlignPredicted(const std::vector<cv::Mat>& images, const Rigid3d& predicted);
+  TrackResult AlignPredicted(const Frame& frame, const Rigid3d& predicted);
   double Confidence(const SolveSummary& summary) const;
   // The rectangle of `camera`'s pixels the object can cover at `cam_from_obj`: the
   // bounding sphere's rectangle (3.5, (4.16)-(4.21)) cut down to the projection of the
@@ -149,10 +167,17 @@ class Tracker {
   double sphere_radius_ = 0.0;
   std::array<Eigen::Vector3d, 8> box_corners_;  // the model's axis-aligned box, object frame
   TrackerOptions options_;
+  // The photometric modality runs for this model (PhotometricOptions::require_appearance).
+  bool use_photometric_ = true;
   std::unique_ptr<MotionPredictor> predictor_;
   std::unique_ptr<ThreadPool> pool_;  // null with one thread
   std::vector<std::unique_ptr<CameraWork>> work_;
-  std::vector<FlowEquations> equations_;  // per camera, the current round's
+  // The current round's equations of each modality, per camera (reused: their capacity).
+  ModalityEquations photometric_, depth_, region_;
+  // Per camera, the region modality's colour statistics; learnt from the level-0 rounds of
+  // an alignment, committed when Track() finds the frame confidently tracked.
+  std::vector<ColorHistograms> histograms_;
+  bool learn_from_start_ = false;  // the next Track() starts at a given pose (Initialize)
 
   bool initialized_ = false;
   TrackStatus status_ = TrackStatus::kTracking;

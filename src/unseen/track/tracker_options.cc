@@ -61,6 +61,8 @@ void FailureOptions::Check() const {
                "failure: need 0 <= good_update_px ({}) < bad_update_px ({})", good_update_px,
                bad_update_px);
   UNSEEN_CHECK(min_pixels >= 6, "failure.min_pixels {} must be >= 6", min_pixels);
+  UNSEEN_CHECK(min_region_lines >= 1, "failure.min_region_lines {} must be >= 1",
+               min_region_lines);
   UNSEEN_CHECK(lost_confidence >= 0.0 && lost_confidence <= 1.0,
                "failure.lost_confidence {} must be in [0, 1]", lost_confidence);
   UNSEEN_CHECK(recover_confidence >= lost_confidence && recover_confidence <= 1.0,
@@ -104,10 +106,17 @@ void TrackerOptions::Check() const {
   pyramid.Check();
   predictor.Check();
   failure.Check();
+  photometric.Check();
+  depth.Check();
+  region.Check();
   reacquisition.Check();
   UNSEEN_CHECK(frame_interval_s > 0.0 && std::isfinite(frame_interval_s),
                "frame_interval_s {} must be > 0", frame_interval_s);
   UNSEEN_CHECK(threads >= 0 && threads <= 256, "threads {} must be in [0, 256]", threads);
+}
+
+void PhotometricOptions::Check() const {
+  UNSEEN_CHECK(weight > 0.0 && std::isfinite(weight), "photometric.weight {} must be > 0", weight);
 }
 
 namespace {
@@ -162,7 +171,14 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
   MotionPredictorOptions& pr = o->predictor;
   FailureOptions& fa = o->failure;
   ReacquisitionOptions& re = o->reacquisition;
+  DepthModalityOptions& de = o->depth;
+  RegionModalityOptions& rg = o->region;
+  PhotometricOptions& ph = o->photometric;
   const std::map<std::string, std::map<std::string, Setter>> sections = {
+      {"photometric",
+       {{"enabled", Field(&ph.enabled)},
+        {"require_appearance", Field(&ph.require_appearance)},
+        {"weight", Field(&ph.weight)}}},
       {"preprocess",
        {{"use_linf", Field(&pp.use_linf)},
         {"linf_sigma_px", Field(&pp.linf_sigma_px)},
@@ -231,6 +247,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"good_update_px", Field(&fa.good_update_px)},
         {"bad_update_px", Field(&fa.bad_update_px)},
         {"min_pixels", Field(&fa.min_pixels)},
+        {"min_region_lines", Field(&fa.min_region_lines)},
         {"lost_confidence", Field(&fa.lost_confidence)},
         {"lost_after_frames", Field(&fa.lost_after_frames)},
         {"recover_confidence", Field(&fa.recover_confidence)},
@@ -250,6 +267,37 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"seed_when_doubtful", Field(&re.seed_when_doubtful)},
         {"doubtful_confidence", Field(&re.doubtful_confidence)},
         {"min_seed_shift_px", Field(&re.min_seed_shift_px)}}},
+      {"depth",
+       {{"enabled", Field(&de.enabled)},
+        {"max_points", Field(&de.max_points)},
+        {"max_distance_m", Field(&de.max_distance_m)},
+        {"kernel", EnumField(&de.residual.kernel, &ParseRobustKernel)},
+        {"kernel_width", Field(&de.residual.kernel_width)},
+        {"min_scale_m", Field(&de.residual.min_scale)},
+        {"min_noise_m", Field(&de.residual.min_noise)},
+        {"weight", Field(&de.residual.weight)},
+        {"agree_distance_m", Field(&de.agree_distance_m)},
+        {"bad_agreement", Field(&de.bad_agreement)},
+        {"good_agreement", Field(&de.good_agreement)},
+        {"min_measured", Field(&de.min_measured)},
+        {"max_hidden_share", Field(&de.max_hidden_share)}}},
+      {"region",
+       {{"enabled", Field(&rg.enabled)},
+        {"bins_per_channel", Field(&rg.bins_per_channel)},
+        {"max_lines", Field(&rg.max_lines)},
+        {"line_px", Field(&rg.line_px)},
+        {"learn_margin_px", Field(&rg.learn_margin_px)},
+        {"learn_rate", Field(&rg.learn_rate)},
+        {"min_sigma_px", Field(&rg.min_sigma_px)},
+        {"max_sigma_px", Field(&rg.max_sigma_px)},
+        {"min_contrast", Field(&rg.min_contrast)},
+        {"kernel", EnumField(&rg.residual.kernel, &ParseRobustKernel)},
+        {"kernel_width", Field(&rg.residual.kernel_width)},
+        {"min_scale", Field(&rg.residual.min_scale)},
+        {"min_noise", Field(&rg.residual.min_noise)},
+        {"weight", Field(&rg.residual.weight)},
+        {"bad_agreement", Field(&rg.bad_agreement)},
+        {"good_agreement", Field(&rg.good_agreement)}}},
   };
   UNSEEN_CHECK(root.IsMap(), "{}: expected a map at the top level", what);
   for (const auto& kv : root) {
@@ -264,8 +312,9 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
     }
     const auto it = sections.find(key);
     if (it == sections.end()) {
-      ThrowError("{}: unknown section '{}' (known: preprocess, selection, solver, pyramid, "
-                 "predictor, failure, reacquisition, frame_interval_s, threads)",
+      ThrowError("{}: unknown section '{}' (known: photometric, preprocess, selection, solver, "
+                 "pyramid, "
+                 "predictor, failure, reacquisition, depth, region, frame_interval_s, threads)",
                  what, key);
     }
     ApplySection(kv.second, what + ": " + key, it->second);

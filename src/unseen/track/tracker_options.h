@@ -19,10 +19,12 @@
 
 #include <string>
 
+#include "unseen/track/depth_modality.h"
 #include "unseen/track/flow_solver.h"
 #include "unseen/track/motion_predictor.h"
 #include "unseen/track/pixel_selection.h"
 #include "unseen/track/preprocess.h"
+#include "unseen/track/region_modality.h"
 
 namespace unseen {
 
@@ -91,6 +93,9 @@ struct FailureOptions {
   double good_update_px = 0.3;
   double bad_update_px = 2.0;
   int min_pixels = 40;
+  // The region modality's agreement (RegionModalityOptions) stands in for the photometric
+  // terms above when it is higher and rests on at least this many correspondence lines.
+  int min_region_lines = 20;
   double lost_confidence = 0.25;   // a frame below this is bad
   int lost_after_frames = 2;       // this many bad frames in a row: lost (hysteresis)
   double recover_confidence = 0.5; // while lost, a frame above this re-acquires
@@ -143,7 +148,21 @@ struct ReacquisitionOptions {
   void Check() const;
 };
 
+// The photometric modality (SPEC 3.1): the pre-processing, pixel selection and solver
+// settings below are its own; this switches it and weighs it against the others
+// (ResidualModel::weight, multiplying 1 / noise^2 with the noise in intensity units).
+struct PhotometricOptions {
+  bool enabled = true;
+  // Only for models with appearance (Mesh::HasAppearance): a model of one flat colour gives
+  // the optical flow nothing but its silhouette's edges, which mislead on low-contrast
+  // backgrounds and under moving highlights; the region modality judges the silhouette.
+  bool require_appearance = true;
+  double weight = 1.0;
+  void Check() const;
+};
+
 struct TrackerOptions {
+  PhotometricOptions photometric;
   PreprocessOptions preprocess;
   PixelSelectionOptions selection;
   FlowSolverOptions solver;
@@ -151,6 +170,8 @@ struct TrackerOptions {
   MotionPredictorOptions predictor;
   FailureOptions failure;
   ReacquisitionOptions reacquisition;
+  DepthModalityOptions depth;    // used when frames carry depth
+  RegionModalityOptions region;  // the silhouette against learnt colour statistics
   double frame_interval_s = 1.0 / 30.0;  // time between frames for the predictor, s
   // Threads for one frame (a ThreadPool): cameras are rendered, pre-processed and
   // selected in parallel; with one camera the input's pre-processing runs beside the first

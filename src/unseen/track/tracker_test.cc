@@ -365,7 +365,7 @@ TEST_F(TrackerScene, BadInputThrows) {
                                           Eigen::Vector3d(nan, 0, 1))),
                Error);
   tracker.Initialize(truth_);
-  EXPECT_THROW(tracker.Track({}), Error);                    // wrong camera count
+  EXPECT_THROW(tracker.Track(std::vector<cv::Mat>{}), Error);                    // wrong camera count
   EXPECT_THROW(tracker.Track({image_, image_}), Error);      // wrong camera count
   cv::Mat small;
   cv::resize(image_, small, cv::Size(256, 128));

@@ -1,0 +1,133 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/track/depth_modality.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "unseen/util/error.h"
+
+namespace unseen {
+
+void DepthModalityOptions::Check() const {
+  UNSEEN_CHECK(max_points >= 6 && max_points <= 1000000, "depth.max_points {} must be in [6, 1e6]",
+               max_points);
+  UNSEEN_CHECK(max_distance_m > 0.0 && std::isfinite(max_distance_m),
+               "depth.max_distance_m {} must be > 0", max_distance_m);
+  residual.Check("depth");
+  UNSEEN_CHECK(agree_distance_m > 0.0 && std::isfinite(agree_distance_m),
+               "depth.agree_distance_m {} must be > 0", agree_distance_m);
+  UNSEEN_CHECK(0.0 <= bad_agreement && bad_agreement < good_agreement && good_agreement <= 1.0,
+               "depth: need 0 <= bad_agreement ({}) < good_agreement ({}) <= 1", bad_agreement,
+               good_agreement);
+  UNSEEN_CHECK(min_measured >= 1, "depth.min_measured {} must be >= 1", min_measured);
+  UNSEEN_CHECK(max_hidden_share > 0.0 && max_hidden_share <= 1.0,
+               "depth.max_hidden_share {} must be in (0, 1]", max_hidden_share);
+}
+
+DepthCounts& DepthCounts::operator+=(const DepthCounts& o) {
+  sampled += o.sampled;
+  measured += o.measured;
+  agreeing += o.agreeing;
+  hidden += o.hidden;
+  used += o.used;
+  return *this;
+}
+
+double DepthCounts::Agreement(const DepthModalityOptions& options) const {
+  if (measured < options.min_measured) return -1.0;
+  // Nearly all of it behind other surfaces: either the object is hidden, or the pose is
+  // far behind it; neither is a pose to trust.
+  if (double(hidden) > options.max_hidden_share * double(measured)) return 0.0;
+  return double(agreeing) / double(measured - hidden);
+}
+
+void AddDepthEquations(const DepthModalityInput& in, const DepthModalityOptions& options,
+                       FlowEquations* out, DepthCounts* counts) {
+  const cv::Mat& rendered = *in.rendered_depth;
+  const cv::Mat& measured = *in.measured_depth;
+  UNSEEN_CHECK(rendered.type() == CV_32FC1 && measured.type() == CV_32FC1,
+               "AddDepthEquations: depth images must be CV_32FC1");
+  UNSEEN_CHECK(measured.cols == in.camera.width && measured.rows == in.camera.height,
+               "AddDepthEquations: measured depth is {}x{}, the camera {}x{}", measured.cols,
+               measured.rows, in.camera.width, in.camera.height);
+  const int width = rendered.cols, height = rendered.rows;
+  if (width < 3 || height < 3) return;
+
+  // Grid step from the rendered area, so that about max_points pixels are sampled.
+  long covered = 0;
+  for (int y = 0; y < height; y += 2) {
+    const float* d = rendered.ptr<float>(y);
+    for (int x = 0; x < width; x += 2) covered += d[x] > 0.0f;
+  }
+  covered *= 4;
+  if (covered == 0) return;
+  const int step = std::max(1, int(std::ceil(std::sqrt(double(covered) / options.max_points))));
+  const double gate = options.max_distance_m * double(1 << in.level);
+  const PinholeCamera& lc = in.level_camera;
+  const PinholeCamera& fc = in.camera;
+  const float o[3] = {float(in.origin_in_cam.x()), float(in.origin_in_cam.y()),
+                      float(in.origin_in_cam.z())};
+  auto back_project = [&](int bx, int by, float z) {
+    const double u = bx + in.roi.x0, v = by + in.roi.y0;
+    return Eigen::Vector3d((u - lc.cx) / lc.fx * z, (v - lc.cy) / lc.fy * z, z);
+  };
+  // Neighbours for the normal must lie on the same surface: within this depth of the point.
+  const float max_step_depth = 0.02f;
+
+  DepthCounts c;
+  // Offset the grid by half a step so that the samples sit inside the object, not on its
+  // box's border.
+  for (int y = 1 + step / 2; y < height - 1; y += step) {
+    const float* row = rendered.ptr<float>(y);
+    const float* up = rendered.ptr<float>(y - 1);
+    const float* down = rendered.ptr<float>(y + 1);
+    for (int x = 1 + step / 2; x < width - 1; x += step) {
+      const float z = row[x];
+      if (z <= 0.0f) continue;
+      ++c.sampled;
+      const Eigen::Vector3d p = back_project(x, y, z);
+      // The measured point where p projects at full resolution (nearest pixel).
+      const Eigen::Vector2d pix = fc.Project(p);
+      const int mx = int(std::lround(pix.x())), my = int(std::lround(pix.y()));
+      if (mx < 0 || my < 0 || mx >= fc.width || my >= fc.height) continue;
+      const float zm = measured.ptr<float>(my)[mx];
+      if (!(zm > 0.0f) || !std::isfinite(zm)) continue;
+      ++c.measured;
+      const double dz = double(zm) - double(z);
+      if (std::abs(dz) <= options.agree_distance_m) ++c.agreeing;
+      if (dz < -options.agree_distance_m) ++c.hidden;
+      if (std::abs(dz) > gate) continue;
+      // Normal from central differences of the rendered surface.
+      const float zl = row[x - 1], zr = row[x + 1], zu = up[x], zd = down[x];
+      if (zl <= 0.0f || zr <= 0.0f || zu <= 0.0f || zd <= 0.0f) continue;
+      if (std::abs(zl - z) > max_step_depth || std::abs(zr - z) > max_step_depth ||
+          std::abs(zu - z) > max_step_depth || std::abs(zd - z) > max_step_depth) {
+        continue;
+      }
+      const Eigen::Vector3d tx = back_project(x + 1, y, zr) - back_project(x - 1, y, zl);
+      const Eigen::Vector3d ty = back_project(x, y + 1, zd) - back_project(x, y - 1, zu);
+      Eigen::Vector3d n = ty.cross(tx);
+      const double norm = n.norm();
+      if (!(norm > 0.0)) continue;
+      n /= norm;
+      if (n.dot(p) > 0.0) n = -n;  // facing the camera
+      // Grazing surfaces measure badly and their normal is unreliable.
+      if (-n.dot(p.normalized()) < 0.2) continue;
+      const Eigen::Vector3d q = fc.Unproject(Eigen::Vector2d(mx, my), zm);
+      const float b = static_cast<float>(n.dot(q - p));
+      const float pr[3] = {float(p.x()) - o[0], float(p.y()) - o[1], float(p.z()) - o[2]};
+      const float nf[3] = {float(n.x()), float(n.y()), float(n.z())};
+      const float a[6] = {nf[0],
+                          nf[1],
+                          nf[2],
+                          pr[1] * nf[2] - pr[2] * nf[1],
+                          pr[2] * nf[0] - pr[0] * nf[2],
+                          pr[0] * nf[1] - pr[1] * nf[0]};
+      out->Add(a, b, 1.0f);
+      ++c.used;
+    }
+  }
+  *counts += c;
+}
+
+}  // namespace unseen

@@ -1,0 +1,81 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// The depth modality: whenever a frame carries a depth image (RGB-D cameras, registered to
+// the colour camera), the rendered surface is aligned with the measured one by robust
+// point-to-plane distances, in the same Gauss-Newton step as the photometric rows
+// (flow_solver.h, SolveJoint). A rendered pixel x with surface point p (camera frame, from
+// the render's depth) and normal n is paired with the measured point q at the pixel where p
+// projects in the full-resolution camera (projective association). Under the object twist
+// (v, w) about its origin o, p moves by v + w x (p - o), so the row is
+//     a = (n, (p - o) x n),   b = n . (q - p),
+// the same form as the optical-flow row (flow_jacobian.h). Normals come from the rendered
+// depth map (central differences of the back-projected points), exact on flat faces.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include "unseen/camera/camera.h"
+#include "unseen/track/flow_solver.h"
+
+namespace unseen {
+
+struct DepthModalityOptions {
+  bool enabled = true;  // used whenever the frame carries depth
+  // Rendered pixels are sampled on a regular grid with at most this many per camera and
+  // round (the grid's step follows the rendered area).
+  int max_points = 800;
+  // Pairs whose measured depth differs from the rendered one by more than this along the
+  // ray are no correspondence (another surface), metres at level 0; the gate doubles at
+  // each coarser pyramid level (whose start may be further off).
+  double max_distance_m = 0.03;
+  // Robust kernel, scales and weight against the other modalities; residuals in metres.
+  // The weight makes up for the photometric rows' count: thousands of pixels whose errors
+  // are correlated (the blur spreads one edge over several) would otherwise outvote a few
+  // hundred independent depth measurements (30 measured best on real RGB-D footage).
+  ResidualModel residual{RobustKernel::kTukey, 4.685, /*min_scale=*/0.002,
+                         /*min_noise=*/0.002, /*weight=*/30.0};
+  // Confidence: a sampled point agrees when its measured depth is within agree_distance_m
+  // of the rendered one, and is hidden (an occluder in front) when the measured surface is
+  // nearer by more than that. The depth term of the confidence ramps from 0 at
+  // bad_agreement to 1 at good_agreement of the share of agreeing points among the visible
+  // (not hidden) measured ones; with fewer than min_measured measured points depth does not
+  // judge the frame, and with more than max_hidden_share of them hidden it judges it bad
+  // (the object hidden, or the pose far behind it).
+  double agree_distance_m = 0.01;
+  double bad_agreement = 0.3;
+  double good_agreement = 0.7;
+  int min_measured = 30;
+  double max_hidden_share = 0.8;
+  void Check() const;
+};
+
+// What the depth rows of one round saw (summed over cameras as needed).
+struct DepthCounts {
+  long sampled = 0;   // rendered pixels sampled
+  long measured = 0;  // with a measured depth
+  long agreeing = 0;  // measured within agree_distance_m
+  long hidden = 0;    // measured nearer than the render by more than agree_distance_m
+  long used = 0;      // gave a row (within the gate, with a normal)
+  DepthCounts& operator+=(const DepthCounts& o);
+  // Share of agreeing points among the measured, not hidden ones; 0 when nearly all are
+  // hidden; -1 when depth cannot judge (too few measured points).
+  double Agreement(const DepthModalityOptions& options) const;
+};
+
+// One camera at one pyramid level.
+struct DepthModalityInput {
+  const cv::Mat* rendered_depth = nullptr;  // CV_32FC1 metres (0 = no surface), size of roi
+  PixelRect roi;                            // level pixels of rendered_depth's (0, 0)
+  PinholeCamera level_camera;               // the level's camera
+  int level = 0;
+  const cv::Mat* measured_depth = nullptr;  // CV_32FC1 metres at full resolution, 0 = none
+  PinholeCamera camera;                     // the full-resolution camera of measured_depth
+  Eigen::Vector3d origin_in_cam = Eigen::Vector3d::Zero();  // object origin, camera frame
+};
+
+// Appends the point-to-plane rows of the sampled pixels to `out` (rows in the camera frame,
+// inv_grad_norm = 1: residuals in metres) and adds to `counts`.
+void AddDepthEquations(const DepthModalityInput& input, const DepthModalityOptions& options,
+                       FlowEquations* out, DepthCounts* counts);
+
+}  // namespace unseen

@@ -1,0 +1,222 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// The tracker's modalities one at a time and together: depth alone, the region (silhouette)
+// alone on an untextured model, the photometric modality switched off for a model without
+// appearance, and a confidence that depth and silhouette keep honest.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "unseen/mesh/primitives.h"
+#include "unseen/render/rasterizer.h"
+#include "unseen/track/depth_modality.h"
+#include "unseen/track/region_modality.h"
+#include "unseen/track/test_scene.h"
+#include "unseen/track/tracker.h"
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+Rigid3d CubePose() {
+  return Rigid3d(ExpSO3(Eigen::Vector3d(0.45, 0.7, 0.1)), Eigen::Vector3d(0.02, -0.01, 1.0));
+}
+
+Rigid3d Perturb(const Rigid3d& pose, const Vector6d& d) {
+  return Rigid3d(ExpSO3(d.tail<3>()) * pose.rotation(), pose.translation() + d.head<3>());
+}
+
+// The lettered cube without its texture: one flat grey-blue colour.
+Mesh FlatCube() {
+  Mesh cube = MakeLetteredCube(0.096, 16);
+  cube.uvs.clear();
+  for (Material& m : cube.materials) {
+    m.texture.release();
+    m.diffuse_bgr = Eigen::Vector3f(0.55f, 0.35f, 0.25f);
+  }
+  return cube;
+}
+
+// Metric depth of `mesh` at `world_from_obj` in front of a wall at `wall_m`, as an RGB-D
+// camera registered to the colour camera measures it.
+cv::Mat DepthImage(const Mesh& mesh, const RigCamera& camera, const Rigid3d& world_from_obj,
+                   float wall_m) {
+  RenderBuffers buffers;
+  RenderOptions options;
+  options.write_color = false;
+  Render(mesh, camera.intrinsics, camera.cam_from_world() * world_from_obj,
+         camera.intrinsics.ImageRect(), options, &buffers);
+  cv::Mat depth(buffers.depth.size(), CV_32FC1, cv::Scalar(wall_m));
+  buffers.depth.copyTo(depth, buffers.mask);
+  return depth;
+}
+
+class ModalityScene : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    rig_ = testing::OneCameraRig();
+    truth_ = CubePose();
+    flat_ = FlatCube();
+    // A uniform pale background: the untextured cube's silhouette is its only cue.
+    background_ = cv::Mat(rig_.cameras[0].intrinsics.height, rig_.cameras[0].intrinsics.width,
+                          CV_32FC3, cv::Scalar(0.8, 0.85, 0.9));
+    frame_.images = {testing::RenderOverBackground(flat_, rig_.cameras[0], truth_, background_)};
+    frame_.depths = {DepthImage(flat_, rig_.cameras[0], truth_, 1.6f)};
+  }
+  Rig rig_;
+  Rigid3d truth_;
+  Mesh flat_;
+  cv::Mat background_;
+  Frame frame_;
+};
+
+TEST(MeshAppearance, TellsTexturedFromFlatModels) {
+  EXPECT_TRUE(MakeLetteredCube(0.1, 16).HasAppearance());
+  EXPECT_FALSE(FlatCube().HasAppearance());
+  Mesh coloured = FlatCube();
+  coloured.colors_bgr.assign(coloured.vertices.size(), Eigen::Vector3f(0.2f, 0.2f, 0.2f));
+  EXPECT_FALSE(coloured.HasAppearance());
+  coloured.colors_bgr[0] = Eigen::Vector3f(0.9f, 0.2f, 0.2f);
+  EXPECT_TRUE(coloured.HasAppearance());
+}
+
+TEST_F(ModalityScene, DepthAloneRecoversThePose) {
+  TrackerOptions options;
+  options.photometric.enabled = false;
+  options.region.enabled = false;
+  Tracker tracker(rig_, flat_, options);
+  Vector6d d;
+  d << 0.006, -0.005, 0.02, 3 * kDeg, -3 * kDeg, 2 * kDeg;
+  const TrackResult r = tracker.Align(frame_, Perturb(truth_, d));
+  const PoseDifference e = Difference(r.world_from_obj, truth_);
+  EXPECT_LT(e.translation, 0.002) << r.BriefReport();
+  EXPECT_LT(e.rotation_rad, 0.5 * kDeg) << r.BriefReport();
+  EXPECT_GT(r.summary.depth_equations, 100) << r.BriefReport();
+  EXPECT_EQ(r.summary.counts.used, 0) << "the photometric modality was switched off";
+}
+
+TEST_F(ModalityScene, RegionAloneTracksAnUntexturedModel) {
+  Tracker tracker(rig_, flat_);  // defaults: no photometric rows for a flat model
+  tracker.Initialize(truth_);
+  Frame colour_only;
+  colour_only.images = frame_.images;
+  const TrackResult first = tracker.Track(colour_only);  // learns the colour statistics
+  EXPECT_EQ(first.status, TrackStatus::kTracking) << first.BriefReport();
+  EXPECT_EQ(first.summary.counts.used, 0) << "a flat model gives no photometric rows";
+  Vector6d d;
+  d << 0.004, -0.004, 0.0, 2 * kDeg, -2 * kDeg, 2 * kDeg;
+  const TrackResult r = tracker.Align(colour_only, Perturb(truth_, d));
+  const PoseDifference e = Difference(r.world_from_obj, truth_);
+  EXPECT_LT(e.translation, 0.004) << r.BriefReport();
+  EXPECT_LT(e.rotation_rad, 1.0 * kDeg) << r.BriefReport();
+  EXPECT_GT(r.summary.region_counts.used, 50) << r.BriefReport();
+  EXPECT_GT(r.confidence, 0.5) << r.BriefReport();
+}
+
+TEST_F(ModalityScene, AllModalitiesTogether) {
+  const Mesh textured = MakeLetteredCube(0.096, 128);
+  Frame frame;
+  frame.images = {testing::RenderOverBackground(textured, rig_.cameras[0], truth_,
+                                                testing::Background(rig_.cameras[0].intrinsics, 3))};
+  frame.depths = {DepthImage(textured, rig_.cameras[0], truth_, 1.6f)};
+  Tracker tracker(rig_, textured);
+  tracker.Initialize(truth_);
+  tracker.Track(frame);
+  Vector6d d;
+  d << 0.006, -0.005, 0.02, 3 * kDeg, -3 * kDeg, 2 * kDeg;
+  const TrackResult r = tracker.Align(frame, Perturb(truth_, d));
+  const PoseDifference e = Difference(r.world_from_obj, truth_);
+  EXPECT_LT(e.translation, 0.0015) << r.BriefReport();
+  EXPECT_LT(e.rotation_rad, 0.3 * kDeg) << r.BriefReport();
+  EXPECT_GT(r.summary.counts.used, 500);
+  EXPECT_GT(r.summary.depth_equations, 100);
+  EXPECT_GT(r.summary.region_counts.used, 50);
+}
+
+TEST_F(ModalityScene, DepthDisagreementMakesAPoseFarAwayLost) {
+  // A start 30 cm behind the object (the image shows it, the depth does not agree):
+  // the alignment cannot pull it in, and depth must not let it count as tracked.
+  TrackerOptions options;
+  options.region.enabled = false;
+  options.photometric.require_appearance = false;
+  Tracker tracker(rig_, flat_, options);
+  Vector6d d = Vector6d::Zero();
+  d(2) = 0.30;
+  const TrackResult r = tracker.Align(frame_, Perturb(truth_, d), 1);
+  EXPECT_LT(r.confidence, options.failure.lost_confidence) << r.BriefReport();
+  const double agreement = r.summary.depth_counts.Agreement(options.depth);
+  EXPECT_GE(agreement, 0.0) << "depth should judge this frame";
+  EXPECT_LT(agreement, options.depth.bad_agreement);
+}
+
+TEST(DepthModality, RowsVanishAtTheTruePose) {
+  const Rig rig = testing::OneCameraRig();
+  const Mesh cube = FlatCube();
+  const Rigid3d cam_from_obj = CubePose();
+  const cv::Mat measured = DepthImage(cube, rig.cameras[0], cam_from_obj, 1.6f);
+  RenderBuffers rendered;
+  RenderOptions ro;
+  ro.write_color = false;
+  const PixelRect roi{150, 50, 370, 210};
+  Render(cube, rig.cameras[0].intrinsics, cam_from_obj, roi, ro, &rendered);
+  DepthModalityInput in;
+  in.rendered_depth = &rendered.depth;
+  in.roi = roi;
+  in.level_camera = rig.cameras[0].intrinsics;
+  in.measured_depth = &measured;
+  in.camera = rig.cameras[0].intrinsics;
+  in.origin_in_cam = cam_from_obj.translation();
+  FlowEquations eq;
+  DepthCounts counts;
+  AddDepthEquations(in, DepthModalityOptions(), &eq, &counts);
+  ASSERT_GT(eq.size(), 200);
+  for (int i = 0; i < eq.size(); ++i) EXPECT_LT(std::abs(eq.rhs[i]), 1e-4) << i;
+  EXPECT_EQ(counts.agreeing, counts.measured);
+  EXPECT_EQ(counts.hidden, 0);
+  EXPECT_NEAR(counts.Agreement(DepthModalityOptions()), 1.0, 1e-12);
+}
+
+TEST(RegionModality, HistogramsLearnAndJudgeColours) {
+  ColorHistograms h(16);
+  EXPECT_FALSE(h.learnt());
+  const float red[3] = {0.1f, 0.1f, 0.9f}, grey[3] = {0.6f, 0.6f, 0.6f};
+  for (int i = 0; i < 100; ++i) {
+    h.Count(red, true);
+    h.Count(grey, false);
+  }
+  h.Commit(0.2);
+  ASSERT_TRUE(h.learnt());
+  EXPECT_GT(h.Foreground(red), 0.99f);
+  EXPECT_LT(h.Foreground(grey), 0.01f);
+  // Too few samples leave the histograms as they are.
+  h.Count(grey, true);
+  h.Commit(1.0);
+  EXPECT_LT(h.Foreground(grey), 0.01f);
+  h.Reset();
+  EXPECT_FALSE(h.learnt());
+}
+
+TEST(ModalityOptions, CheckRejectsNonsense) {
+  DepthModalityOptions depth;
+  EXPECT_NO_THROW(depth.Check());
+  depth.bad_agreement = 0.9;
+  EXPECT_THROW(depth.Check(), Error);
+  RegionModalityOptions region;
+  EXPECT_NO_THROW(region.Check());
+  region.bins_per_channel = 12;
+  EXPECT_THROW(region.Check(), Error);
+  TrackerOptions options = ParseTrackerOptions(
+      "photometric: {enabled: false}\ndepth: {weight: 5, max_points: 100}\n"
+      "region: {line_px: 8, weight: 2}\n");
+  EXPECT_FALSE(options.photometric.enabled);
+  EXPECT_EQ(options.depth.residual.weight, 5.0);
+  EXPECT_EQ(options.depth.max_points, 100);
+  EXPECT_EQ(options.region.line_px, 8);
+  EXPECT_THROW(ParseTrackerOptions("region: {line_px: 0}\n"), Error);
+  EXPECT_THROW(ParseTrackerOptions("depth: {colour: 1}\n"), Error);
+}
+
+}  // namespace
+}  // namespace unseen

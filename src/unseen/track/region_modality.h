@@ -1,0 +1,113 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// The region (silhouette) modality: the rendered model's contour against the image, judged
+// by colour statistics of the object (foreground) and of its surroundings (background)
+// learnt on-line from the tracked frames, in the family of PWP3D, RBOT and SRT3D. It needs
+// no model texture, so untextured models and models with wrong colours track, and its
+// basin is as wide as its correspondence lines where texture is weak.
+//
+// At each round, contour pixels of the rendered mask are sampled; from each, a
+// correspondence line runs along the silhouette's outward normal n over +-line_px pixels of
+// the level's input image. Each pixel y_t of the line gives the posterior of foreground
+// P_f(y_t) = p(y|f) / (p(y|f) + p(y|b)) from the two colour histograms. The contour's
+// position d on the line (between samples) has the discrete posterior
+//     P(d) ~ prod_{t < d} P_f(y_t) prod_{t > d} (1 - P_f(y_t)),
+// whose mean mu and variance s^2 say where the image's contour is. The rendered contour
+// point moves by n . (dx/dxi) xi along the line under the twist xi, which is the
+// optical-flow row (flow_jacobian.h) with the unit normal in place of the image gradient:
+//     a . xi = mu   with weight 1 / s^2.
+// The histograms are learnt from the line pixels well inside (foreground) and well outside
+// (background) the contour of confidently tracked frames, blended with learn_rate.
+#pragma once
+
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "unseen/camera/camera.h"
+#include "unseen/track/flow_solver.h"
+
+namespace unseen {
+
+struct RegionModalityOptions {
+  bool enabled = true;
+  int bins_per_channel = 16;     // colour histogram resolution (bins^3 bins), power of two
+  int max_lines = 200;           // correspondence lines per camera and round
+  int line_px = 12;              // half length of a line, pixels of its level
+  // Line pixels at least this far inside (outside) the rendered contour teach the
+  // foreground (background) histogram, pixels of the level.
+  int learn_margin_px = 2;
+  double learn_rate = 0.2;       // weight of a new frame's histograms (first frame: 1)
+  double min_sigma_px = 0.5;     // floor of the contour position's standard deviation
+  double max_sigma_px = 5.0;     // lines more uncertain than this give no row
+  double min_contrast = 0.2;     // lines whose mean |P_f - 0.5| * 2 is below this give no row
+  // Robust kernel, scales and weight against the other modalities (residuals: contour
+  // offsets over their standard deviation).
+  ResidualModel residual{RobustKernel::kHuber, 1.345, /*min_scale=*/0.3, /*min_noise=*/0.3,
+                         /*weight=*/1.0};
+  // Confidence: the share of line pixels that the histograms assign to the side of the
+  // rendered contour they are on, ramped from bad_agreement to good_agreement.
+  double bad_agreement = 0.55;
+  double good_agreement = 0.75;
+  void Check() const;
+};
+
+// Foreground and background colour histograms of one camera.
+class ColorHistograms {
+ public:
+  explicit ColorHistograms(int bins_per_channel = 16);
+  bool learnt() const { return learnt_; }
+  // Posterior of foreground for a BGR colour in [0, 1].
+  float Foreground(const float* bgr) const { return posterior_[Bin(bgr)]; }
+  int Bin(const float* bgr) const;
+  // Adds a colour to the pending foreground or background counts.
+  void Count(const float* bgr, bool foreground);
+  // Blends the pending counts (normalised) into the histograms with `rate` (1 on the
+  // first commit) and clears them; no change when either side has too few samples.
+  void Commit(double rate);
+  void DiscardPending();
+  void Reset();
+
+ private:
+  void UpdatePosterior();
+  int bins_ = 16, shift_ = 4;
+  bool learnt_ = false;
+  std::vector<float> foreground_, background_, posterior_;
+  std::vector<float> pending_foreground_, pending_background_;
+  double pending_foreground_count_ = 0.0, pending_background_count_ = 0.0;
+};
+
+// What the lines of one round saw.
+struct RegionCounts {
+  long lines = 0;          // contour samples with a full line in the image
+  long used = 0;           // lines that gave a row
+  long pixels = 0;         // line pixels judged
+  long agreeing = 0;       // line pixels on the side of the contour their colour says
+  RegionCounts& operator+=(const RegionCounts& o);
+  // Share of agreeing pixels, or -1 with no line.
+  double Agreement() const { return pixels > 0 ? double(agreeing) / double(pixels) : -1.0; }
+};
+
+// One camera at one pyramid level; buffers of the size of `roi`.
+struct RegionModalityInput {
+  const cv::Mat* image = nullptr;           // CV_32FC3 BGR [0, 1], the level's input
+  const cv::Mat* mask = nullptr;            // CV_8UC1 rendered mask (non-zero: object)
+  const cv::Mat* rendered_depth = nullptr;  // CV_32FC1 metres
+  // Optional CV_8UC1 count of covered 2x2 sub-pixel samples (0..4) of a supersampled
+  // render, whose mask marks any coverage: it places the contour inside boundary pixels.
+  // Null: the mask marks covered pixel centres (the contour half a pixel outside).
+  const cv::Mat* coverage = nullptr;
+  PixelRect roi;                            // level pixels
+  PinholeCamera camera;                     // the level's camera
+  Eigen::Vector3d origin_in_cam = Eigen::Vector3d::Zero();
+  int level = 0;
+};
+
+// Appends one row per usable correspondence line to `out` (rows in the camera frame) when
+// the histograms are learnt; with `learn` the line pixels are counted into the pending
+// histograms. Adds to `counts`.
+void AddRegionEquations(const RegionModalityInput& input, const RegionModalityOptions& options,
+                        bool learn, ColorHistograms* histograms, FlowEquations* out,
+                        RegionCounts* counts);
+
+}  // namespace unseen
