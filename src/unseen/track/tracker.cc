@@ -12,6 +12,7 @@
 #include "unseen/image/image_io.h"
 #include "unseen/track/flow_jacobian.h"
 #include "unseen/track/reacquisition.h"
+#include "unseen/track/virtual_image.h"
 #include "unseen/util/error.h"
 #include "unseen/util/logging.h"
 #include "unseen/util/timer.h"
@@ -95,10 +96,9 @@ struct Tracker::CameraWork {
   bool active = false;
   PinholeCamera camera;  // level camera
   PixelRect roi;         // level pixels
-  cv::Mat input_roi, composite, region, depth_used;
-  cv::Mat mask, depth, coverage;  // virtual image's mask (any coverage), depth, 2x2 count
+  cv::Mat input_roi, region, depth_used;
+  VirtualImage virtual_image;
   PreprocessedImage input_pre, virtual_pre;
-  RenderBuffers render;
   bool virtual_ok = false;  // the last PrepareVirtual rendered something
   bool input_stale = false; // input_roi changed since input_pre was computed
   // This camera's share of the current alignment; the input's pre-processing apart, as it
@@ -323,194 +323,19 @@ TrackResult Tracker::Align(const Frame& frame, const Rigid3d& world_from_obj, in
   return r;
 }
 
-void Tracker::TransferShading(int level, CameraWork* work) const {
-  CameraWork& w = *work;
-  // Low-pass of input and render over the fully covered pixels only (so the background
-  // does not leak in); their ratio is the shading the model lacks. The ratio is formed at
-  // the low-pass's coarse scale and only it is up-sampled.
-  const int width = w.composite.cols, height = w.composite.rows;
-  cv::Mat real(height, width, CV_32FC4), model(height, width, CV_32FC3);
-  for (int y = 0; y < height; ++y) {
-    const uint8_t* cov = w.coverage.ptr<uint8_t>(y);
-    const float* in = w.input_roi.ptr<float>(y);
-    const float* co = w.composite.ptr<float>(y);
-    float* r = real.ptr<float>(y);
-    float* m = model.ptr<float>(y);
-    for (int x = 0; x < width; ++x) {
-      const float weight = cov[x] == 4 ? 1.0f : 0.0f;
-      for (int k = 0; k < 3; ++k) {
-        r[4 * x + k] = weight * in[3 * x + k];
-        m[3 * x + k] = weight * co[3 * x + k];
-      }
-      r[4 * x + 3] = weight;  // the support: share of fully covered pixels
-    }
-  }
-  const double sigma = options_.preprocess.ShadingSigmaAtLevel(level);
-  int factor = 1;
-  const cv::Mat real_low = LowPassDown(real, sigma, &factor);
-  const cv::Mat model_low = LowPassDown(model, sigma, &factor);
-  cv::Mat gain_low(real_low.size(), CV_32FC3);
-  for (int y = 0; y < gain_low.rows; ++y) {
-    const float* r = real_low.ptr<float>(y);
-    const float* m = model_low.ptr<float>(y);
-    float* g = gain_low.ptr<float>(y);
-    for (int x = 0; x < gain_low.cols; ++x) {
-      const float support = r[4 * x + 3];
-      for (int k = 0; k < 3; ++k) {
-        const float den = m[3 * x + k];
-        g[3 * x + k] = support >= 0.05f && den > 0.01f * support
-                           ? std::clamp(r[4 * x + k] / den, 0.2f, 5.0f)
-                           : 1.0f;
-      }
-    }
-  }
-  const cv::Mat gain = LowPassUp(gain_low, w.composite.size(), factor);
-  for (int y = 0; y < height; ++y) {
-    const uint8_t* cov = w.coverage.ptr<uint8_t>(y);
-    const float* g = gain.ptr<float>(y);
-    float* out = w.composite.ptr<float>(y);
-    for (int x = 0; x < width; ++x) {
-      if (!cov[x]) continue;
-      for (int k = 0; k < 3; ++k) out[3 * x + k] *= g[3 * x + k];
-    }
-  }
-}
-
 bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int level,
                             ThreadPool* render_pool, CameraWork* work) const {
   CameraWork& w = *work;
-  StageTimes* times = &w.times;
-  RenderOptions render_options;
-  render_options.pool = render_pool;
-  Timer timer;
-  const int width = w.roi.width(), height = w.roi.height();
   // The object covers no pixel outside its rectangle, so only that part of the region
   // (plus a pixel) is rendered; the margin the filters need stays input.
-  PixelRect rr = w.roi;
+  PixelRect render_rect = w.roi;
   if (const std::optional<PixelRect> rect = ObjectRect(w.camera, cam_from_obj)) {
     const PixelRect tight = rect->Grow(1).Intersect(w.roi);
-    if (!tight.empty()) rr = tight;
+    if (!tight.empty()) render_rect = tight;
   }
-  const int ox = rr.x0 - w.roi.x0, oy = rr.y0 - w.roi.y0;
-  const int rw = rr.width(), rh = rr.height();
-  if (!supersample) {
-    Render(*model_, w.camera, cam_from_obj, rr, render_options, &w.render);
-    times->render_ms += timer.ElapsedMilliseconds();
-    if (w.render.mask.rows != rh || w.render.mask.cols != rw) return false;
-    // Virtual image = input with the render pasted over it (3.1 step 2).
-    timer.Restart();
-    const cv::Rect sub(ox, oy, rw, rh);
-    w.input_roi.copyTo(w.composite);
-    w.render.color.copyTo(w.composite(sub), w.render.mask);
-    w.mask.create(height, width, CV_8UC1);
-    w.mask.setTo(0);
-    w.render.mask.copyTo(w.mask(sub));
-    w.depth.create(height, width, CV_32FC1);
-    w.depth.setTo(0.0f);
-    w.render.depth.copyTo(w.depth(sub));
-    if (options_.preprocess.shading_transfer) {
-      w.coverage.create(height, width, CV_8UC1);
-      w.coverage.setTo(0);
-      w.coverage.setTo(4, w.mask);
-      TransferShading(level, &w);
-    }
-    times->preprocess_ms += timer.ElapsedMilliseconds();
-    return true;
-  }
-  const PinholeCamera fine = w.camera.Scaled(0.5);
-  const PixelRect fine_roi{2 * rr.x0, 2 * rr.y0, 2 * rr.x1, 2 * rr.y1};
-  Render(*model_, fine, cam_from_obj, fine_roi, render_options, &w.render);
-  times->render_ms += timer.ElapsedMilliseconds();
-  if (w.render.mask.rows != 2 * rh || w.render.mask.cols != 2 * rw) return false;
-
-  // Area-average the 2x2 samples: premultiplied colour, coverage, mean depth of the
-  // covered samples. Where coverage is partial, the part not covered shows the background
-  // estimated from the neighbouring uncovered pixels of the input (at the true pose the
-  // input's own pixel there already mixes in the object, which would bias the silhouette).
-  timer.Restart();
-  w.composite.create(height, width, CV_32FC3);
-  w.mask.create(height, width, CV_8UC1);
-  w.depth.create(height, width, CV_32FC1);
-  w.coverage.create(height, width, CV_8UC1);
-  for (int y = 0; y < height; ++y) {
-    const float* in = w.input_roi.ptr<float>(y);
-    float* out = w.composite.ptr<float>(y);
-    uint8_t* mask = w.mask.ptr<uint8_t>(y);
-    uint8_t* cov = w.coverage.ptr<uint8_t>(y);
-    float* depth = w.depth.ptr<float>(y);
-    const bool row_rendered = y >= oy && y < oy + rh;
-    const int x_begin = row_rendered ? ox : width, x_end = row_rendered ? ox + rw : width;
-    // Outside the rendered rectangle: no coverage, the input shows.
-    for (int x = 0; x < width; ++x) {
-      if (x >= x_begin && x < x_end) continue;
-      cov[x] = 0;
-      mask[x] = 0;
-      depth[x] = 0.0f;
-      for (int k = 0; k < 3; ++k) out[3 * x + k] = in[3 * x + k];
-    }
-    if (!row_rendered) continue;
-    const int ry = y - oy;
-    const uint8_t* m0 = w.render.mask.ptr<uint8_t>(2 * ry);
-    const uint8_t* m1 = w.render.mask.ptr<uint8_t>(2 * ry + 1);
-    const float* d0 = w.render.depth.ptr<float>(2 * ry);
-    const float* d1 = w.render.depth.ptr<float>(2 * ry + 1);
-    const float* c0 = w.render.color.ptr<float>(2 * ry);
-    const float* c1 = w.render.color.ptr<float>(2 * ry + 1);
-    for (int x = x_begin; x < x_end; ++x) {
-      const int a = 2 * (x - ox), b = a + 1;
-      const int n = (m0[a] != 0) + (m0[b] != 0) + (m1[a] != 0) + (m1[b] != 0);
-      cov[x] = static_cast<uint8_t>(n);
-      mask[x] = n ? 255 : 0;
-      if (n == 0) {
-        depth[x] = 0.0f;
-        for (int k = 0; k < 3; ++k) out[3 * x + k] = in[3 * x + k];
-        continue;
-      }
-      depth[x] = (d0[a] + d0[b] + d1[a] + d1[b]) / float(n);
-      for (int k = 0; k < 3; ++k) {
-        out[3 * x + k] = 0.25f * (c0[3 * a + k] + c0[3 * b + k] + c1[3 * a + k] + c1[3 * b + k]);
-      }
-    }
-  }
-  if (options_.preprocess.shading_transfer) TransferShading(level, &w);
-  const float gamma = static_cast<float>(options_.preprocess.silhouette_gamma);
-  for (int y = 0; y < height; ++y) {
-    const uint8_t* cov = w.coverage.ptr<uint8_t>(y);
-    float* out = w.composite.ptr<float>(y);
-    for (int x = 0; x < width; ++x) {
-      const int n = cov[x];
-      if (n == 0 || n == 4) continue;
-      float bg[3] = {0, 0, 0};
-      int count = 0;
-      for (int dy = -1; dy <= 1; ++dy) {
-        const int yy = y + dy;
-        if (yy < 0 || yy >= height) continue;
-        const uint8_t* cr = w.coverage.ptr<uint8_t>(yy);
-        const float* ir = w.input_roi.ptr<float>(yy);
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int xx = x + dx;
-          if (xx < 0 || xx >= width || cr[xx] != 0) continue;
-          for (int k = 0; k < 3; ++k) bg[k] += ir[3 * xx + k];
-          ++count;
-        }
-      }
-      const float* in = w.input_roi.ptr<float>(y);
-      const float alpha = 0.25f * n;
-      for (int k = 0; k < 3; ++k) {
-        const float back = count ? bg[k] / float(count) : in[3 * x + k];
-        if (gamma == 1.0f) {
-          out[3 * x + k] += (1.0f - alpha) * back;
-        } else {  // mix in linear light, as the camera's pixel integrated it
-          const float object = std::max(out[3 * x + k] / alpha, 0.0f);
-          const float mixed = alpha * std::pow(object, gamma) +
-                              (1.0f - alpha) * std::pow(std::max(back, 0.0f), gamma);
-          out[3 * x + k] = std::pow(mixed, 1.0f / gamma);
-        }
-      }
-    }
-  }
-  times->preprocess_ms += timer.ElapsedMilliseconds();
-  return true;
+  return ComposeVirtualImage(*model_, w.camera, cam_from_obj, w.roi, render_rect, w.input_roi,
+                             supersample, options_.preprocess, level, render_pool, &w.virtual_image,
+                             &w.times.render_ms, &w.times.preprocess_ms);
 }
 
 bool Tracker::PrepareVirtual(const Rigid3d& cam_from_obj, int level, ThreadPool* render_pool,
@@ -522,18 +347,18 @@ bool Tracker::PrepareVirtual(const Rigid3d& cam_from_obj, int level, ThreadPool*
   }
   Timer timer;
   if (use_photometric_) {
-    Preprocess(w.composite, options_.preprocess, level, true, &w.virtual_pre);
+    Preprocess(w.virtual_image.composite, options_.preprocess, level, true, &w.virtual_pre);
   }
   // Mask and its blurred rim; depth of the rim from the nearest surface.
   if (po.rim_px > 0) {
     const cv::Mat rim_kernel =
         cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * po.rim_px + 1, 2 * po.rim_px + 1));
-    cv::dilate(w.mask, w.region, rim_kernel);
-    cv::dilate(w.depth, w.depth_used, rim_kernel);
-    w.depth.copyTo(w.depth_used, w.mask);
+    cv::dilate(w.virtual_image.mask, w.region, rim_kernel);
+    cv::dilate(w.virtual_image.depth, w.depth_used, rim_kernel);
+    w.virtual_image.depth.copyTo(w.depth_used, w.virtual_image.mask);
   } else {
-    w.mask.copyTo(w.region);
-    w.depth.copyTo(w.depth_used);
+    w.virtual_image.mask.copyTo(w.region);
+    w.virtual_image.depth.copyTo(w.depth_used);
   }
   w.region.row(0).setTo(0);
   w.region.row(w.region.rows - 1).setTo(0);
@@ -681,7 +506,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
         }
         if (use_depth && !frame.depths[c].empty()) {
           DepthModalityInput din;
-          din.rendered_depth = &w.depth;
+          din.rendered_depth = &w.virtual_image.depth;
           din.roi = w.roi;
           din.level_camera = w.camera;
           din.level = level;
@@ -694,9 +519,9 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
         if (options_.region.enabled) {
           RegionModalityInput rin;
           rin.image = &w.input_roi;
-          rin.mask = &w.mask;
-          rin.rendered_depth = &w.depth;
-          if (level < options_.pyramid.supersampled_levels) rin.coverage = &w.coverage;
+          rin.mask = &w.virtual_image.mask;
+          rin.rendered_depth = &w.virtual_image.depth;
+          rin.coverage = &w.virtual_image.coverage;
           rin.roi = w.roi;
           rin.camera = w.camera;
           rin.origin_in_cam = in.origin_in_cam;

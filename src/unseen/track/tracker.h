@@ -152,9 +152,6 @@ class Tracker {
                       CameraWork* work) const;
   // fn(0) ... fn(n - 1) on the pool's threads, or in order without a pool.
   void RunParallel(int n, const std::function<void(int)>& fn);
-  // Multiplies the rendered colour of `work`'s virtual image by the low-frequency ratio of
-  // input to render over the object's pixels (PreprocessOptions::shading_transfer).
-  void TransferShading(int level, CameraWork* work) const;
   // Image motion (pixels at `level`, largest over cameras) of the object under `twist`.
   double UpdatePixels(const Rigid3d& world_from_obj, const Vector6d& twist, int level) const;
   // The re-acquisition search (reacquisition.h), made on first use for the current model.
