@@ -4,7 +4,9 @@
 // and per-stage time on the development sequences and on the SPEC 8 synthetic experiments
 // (rendered with the synthesizer from scenes/*.yaml), plus the thesis comparisons: colour
 // modes (3.6), model scale error (Table 4.2), the five speeds (Table 4.3), occluders with
-// and without rejection (3.4), side light with and without LINF (3.2), and model size.
+// and without rejection (3.4), side light with and without LINF (3.2), and model size; and
+// each development sequence with one modality at a time (photometric, silhouette, depth)
+// against all of them.
 // Prints a table per group and writes every row to a JSON file.
 //
 //   tracker_benchmark [--data DIR] [--scenes DIR] [--work DIR] [--json FILE]
@@ -46,7 +48,7 @@ struct BenchArgs {
   std::string scenes_dir = std::string(UNSEEN_SOURCE_DIR) + "/scenes";
   std::string work_dir = "bench_sequences";
   std::string json_path = "tracker_benchmark.json";
-  std::string groups = "dev,synthetic,color,scale,speed,occlusion,linf,model_size";
+  std::string groups = "dev,modalities,synthetic,color,scale,speed,occlusion,linf,model_size";
   int max_frames = 0;  // 0 = all
 };
 
@@ -150,9 +152,10 @@ std::string Row(const Run& run, const RunOutcome& o) {
   const EvaluationResult& e = o.eval;
   const bool any = e.scored_frames > 0;
   return fmt::format(
-      "{:<34} {:>2} {:>5.1f}% {:>4} {:>7} {:>7} {:>7} {:>6} {:>6} {:>7.0f} {:>5.2f} {:>4.1f} "
-      "{:>5.2f} {:>5.2f} {:>5.2f}  {}",
-      run.name, run.threads, 100.0 * e.success_rate, e.lost_frames,
+      "{:<34} {:>2} {:>5.1f}% {:>5.1f}% {:>4} {:>7} {:>7} {:>7} {:>6} {:>6} {:>7.0f} {:>5.2f} "
+      "{:>4.1f} {:>5.2f} {:>5.2f} {:>5.2f}  {}",
+      run.name, run.threads, 100.0 * e.success_rate, 100.0 * e.strict_success_rate,
+      e.lost_frames,
       any ? fmt::format("{:.2f}", e.trans_err_mm.mean) : "-",
       any ? fmt::format("{:.2f}", e.trans_err_mm.rms) : "-",
       any ? fmt::format("{:.1f}", e.trans_err_mm.max) : "-",
@@ -164,9 +167,9 @@ std::string Row(const Run& run, const RunOutcome& o) {
 
 std::string Header() {
   return fmt::format(
-      "{:<34} {:>2} {:>6} {:>4} {:>7} {:>7} {:>7} {:>6} {:>6} {:>7} {:>5} {:>4} {:>5} {:>5} {:>5}  "
-      "{}",
-      "run", "th", "5cm5°", "lost", "mean_mm", "rms_mm", "max_mm", "mean°", "max°", "fps", "cpu",
+      "{:<34} {:>2} {:>6} {:>6} {:>4} {:>7} {:>7} {:>7} {:>6} {:>6} {:>7} {:>5} {:>4} {:>5} {:>5} "
+      "{:>5}  {}",
+      "run", "th", "5cm5°", "2cm2°", "lost", "mean_mm", "rms_mm", "max_mm", "mean°", "max°", "fps", "cpu",
       "rnd", "rend", "sel", "solve", "thesis");
 }
 
@@ -185,6 +188,18 @@ std::string SyntheticSequence(const BenchArgs& args, const std::string& name) {
   return out.string();
 }
 
+// The sequence folders of `data_dir`, sorted.
+std::vector<fs::path> DevSequences(const std::string& data_dir) {
+  std::vector<fs::path> dirs;
+  for (const auto& entry : fs::directory_iterator(data_dir)) {
+    if (entry.is_directory() && fs::exists(entry.path() / "sequence.json")) {
+      dirs.push_back(entry.path());
+    }
+  }
+  std::sort(dirs.begin(), dirs.end());
+  return dirs;
+}
+
 std::vector<Run> PlanRuns(const BenchArgs& args, const std::vector<std::string>& groups) {
   auto wanted = [&](const std::string& g) {
     return std::find(groups.begin(), groups.end(), g) != groups.end();
@@ -196,18 +211,33 @@ std::vector<Run> PlanRuns(const BenchArgs& args, const std::vector<std::string>&
   const TrackerOptions defaults;
 
   if (wanted("dev") && have_dev) {
-    std::vector<fs::path> dirs;
-    for (const auto& entry : fs::directory_iterator(args.data_dir)) {
-      if (entry.is_directory() && fs::exists(entry.path() / "sequence.json")) {
-        dirs.push_back(entry.path());
-      }
-    }
-    std::sort(dirs.begin(), dirs.end());
-    for (const fs::path& dir : dirs) {
+    for (const fs::path& dir : DevSequences(args.data_dir)) {
       for (int threads : {1, 2}) {
         add({"dev", dir.filename().string(), dir.string(), defaults, {}, threads,
              "~5 mm, 0.5° (exact model, synthetic)"});
       }
+    }
+  }
+  if (wanted("modalities") && have_dev) {
+    // One modality at a time against all of them (the defaults), on every development
+    // sequence; depth only where the frames carry it.
+    for (const fs::path& dir : DevSequences(args.data_dir)) {
+      const bool has_depth = Sequence::Open(dir.string()).has_depth();
+      const std::string name = dir.filename().string();
+      TrackerOptions photometric = defaults;
+      photometric.photometric.require_appearance = false;
+      photometric.region.enabled = false;
+      photometric.depth.enabled = false;
+      TrackerOptions silhouette = defaults;
+      silhouette.photometric.enabled = false;
+      silhouette.depth.enabled = false;
+      TrackerOptions depth = defaults;
+      depth.photometric.enabled = false;
+      depth.region.enabled = false;
+      add({"modalities", name + " photometric", dir.string(), photometric, {}, 1, ""});
+      add({"modalities", name + " silhouette", dir.string(), silhouette, {}, 1, ""});
+      if (has_depth) add({"modalities", name + " depth", dir.string(), depth, {}, 1, ""});
+      add({"modalities", name + " all", dir.string(), defaults, {}, 1, ""});
     }
   }
   if (wanted("synthetic")) {
@@ -307,7 +337,8 @@ int Main(int argc, char** argv) {
   app.add_option("--work", args.work_dir, "Where synthetic sequences are rendered and cached");
   app.add_option("--json", args.json_path, "Results JSON to write");
   app.add_option("--groups", args.groups,
-                 "Comma-separated: dev,synthetic,color,scale,speed,occlusion,linf,model_size");
+                 "Comma-separated: dev,modalities,synthetic,color,scale,speed,occlusion,linf,"
+                 "model_size");
   app.add_option("--max-frames", args.max_frames, "Track at most N frames per run (0 = all)");
   CLI11_PARSE(app, argc, argv);
   SetVerbosity(1);
