@@ -218,7 +218,7 @@ std::vector<cv::Mat> Tracker::CheckImages(const std::vector<cv::Mat>& images) co
     const cv::Mat& im = images[c];
     const PinholeCamera& cam = rig_.cameras[c].intrinsics;
     const std::string& name = rig_.cameras[c].name;
-    UNSEEN_CHECK(!im.empty(), "Tracker::Track: image of camera '{}' is empty", name);
+    if (im.empty()) continue;  // no frame from this camera: it sits this one out
     UNSEEN_CHECK(im.cols == cam.width && im.rows == cam.height,
                  "Tracker::Track: image of camera '{}' is {}x{}, the camera is {}x{}", name, im.cols,
                  im.rows, cam.width, cam.height);
@@ -510,6 +510,7 @@ TrackResult Tracker::AlignChecked(const std::vector<cv::Mat>& images, const Rigi
     auto place_region = [&](int c, const Rigid3d& world_from_obj) {
       CameraWork& w = *work_[c];
       w.active = false;
+      if (images[c].empty()) return;  // this camera has no image this frame
       const Rigid3d cam_from_obj = cam_from_world_[c] * world_from_obj;
       const std::optional<PixelRect> rect =
           coarsest ? w.camera.SphereRect(cam_from_obj * sphere_centre_, sphere_radius_)
@@ -678,6 +679,9 @@ TrackResult Tracker::Track(const std::vector<cv::Mat>& images_per_camera) {
   UNSEEN_CHECK(initialized_, "Tracker::Track called before Initialize()");
   Timer total;
   const std::vector<cv::Mat> images = CheckImages(images_per_camera);
+  if (std::all_of(images.begin(), images.end(), [](const cv::Mat& im) { return im.empty(); })) {
+    return SkipFrame();
+  }
   const FailureOptions& f = options_.failure;
 
   Timer timer;
@@ -737,6 +741,27 @@ TrackResult Tracker::Track(const std::vector<cv::Mat>& images_per_camera) {
     r.confidence = 0.0;
   }
   r.summary.times.predict_ms = predict_ms;
+  r.summary.times.total_ms = total.ElapsedMilliseconds();
+  return r;
+}
+
+TrackResult Tracker::SkipFrame() {
+  UNSEEN_CHECK(initialized_, "Tracker::SkipFrame called before Initialize()");
+  Timer total;
+  if (status_ == TrackStatus::kTracking) {
+    if (++bad_frames_ >= options_.failure.lost_after_frames) {
+      status_ = TrackStatus::kLost;
+      predictor_->Reset(last_good_);
+    } else {
+      predictor_->Predict(options_.frame_interval_s);  // the object moved on meanwhile
+    }
+    // The next frame is a frame interval further from the last correction.
+    recent_correction_px_ = std::numeric_limits<double>::infinity();
+  }
+  TrackResult r;
+  r.world_from_obj = last_good_;
+  r.status = TrackStatus::kLost;
+  r.confidence = 0.0;
   r.summary.times.total_ms = total.ElapsedMilliseconds();
   return r;
 }

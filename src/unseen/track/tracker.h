@@ -87,10 +87,19 @@ class Tracker {
   void Reset(const Rigid3d& world_from_obj) { Initialize(world_from_obj); }
 
   // Tracks one synchronized frame: one image per rig camera, in rig order, CV_32FC3 BGR in
-  // [0, 1] (CV_8UC3 is converted) of that camera's size. Throws unseen::Error before
+  // [0, 1] (CV_8UC3 is converted) of that camera's size. An empty image means that camera
+  // delivered no frame this time: the others are tracked alone (the status and confidence
+  // come from them); no image at all is SkipFrame(). Throws unseen::Error before
   // Initialize(), for a wrong number of images or a wrong size/type. An object out of view
   // is reported as lost, never as NaN.
   TrackResult Track(const std::vector<cv::Mat>& images_per_camera);
+  // A frame time with no image from any camera (a dropped or unreadable frame). Reported
+  // as kLost with the last good pose and confidence 0; the tracking state treats it as a
+  // bad frame: the motion predictor moves on by one frame interval, the next frame uses
+  // the full pyramid, and FailureOptions::lost_after_frames such frames (or bad ones) in
+  // a row make the tracker lost, so that it searches from the last good pose. Throws
+  // before Initialize().
+  TrackResult SkipFrame();
 
   // Aligns the model to the frame starting from `world_from_obj` without touching the
   // tracking state (no prediction, no status): the multi-scale render-solve loop and the
