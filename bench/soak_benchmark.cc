@@ -123,6 +123,7 @@ nlohmann::json ToJson(const BenchArgs& args, const SoakResult& r, double render_
       {"reinitializations", r.reinitializations},
       {"within_5cm_5deg", r.within_5cm_5deg},
       {"tracking_far", r.tracking_far},
+      {"confident_far", r.confident_far},
       {"nan_poses", r.nan_poses},
       {"exceptions", r.exceptions},
       {"exception_messages", r.exception_messages},
@@ -135,6 +136,8 @@ nlohmann::json ToJson(const BenchArgs& args, const SoakResult& r, double render_
         {"model_swaps", r.model_swaps}}},
       {"fps", r.Fps()},
       {"track_seconds", r.track_seconds},
+      {"track_cpu_seconds", r.track_cpu_seconds},
+      {"cpu_ms_per_frame", r.CpuMsPerFrame()},
       {"render_seconds", render_s},
       {"total_seconds", total_s},
       {"rss_mb",
@@ -221,10 +224,11 @@ int Main(int argc, char** argv) {
       "after %d lost frames\n",
       r.reacquisitions, r.reinitializations, o.reinitialize_after_lost);
   std::printf(
-      "accuracy            %d of %d sequence frames tracked within 5 cm/5 deg, %d "
-      "tracked further than %.0f mm/%.0f deg\n",
+      "accuracy            %d of %d sequence frames tracked within 5 cm/5 deg; %d reported "
+      "tracking further than %.0f mm/%.0f deg, %d of them with a confidence of at least "
+      "%.2f\n",
       r.within_5cm_5deg, r.sequence_frames, r.tracking_far, 1e3 * o.far_translation_m,
-      o.far_rotation_rad * 180.0 / M_PI);
+      o.far_rotation_rad * 180.0 / M_PI, r.confident_far, tracker_options.failure.lost_confidence);
   std::printf("NaN poses           %d (must be 0)\n", r.nan_poses);
   std::printf("exceptions          %d (must be 0)\n", r.exceptions);
   for (const std::string& m : r.exception_messages) std::printf("  %s\n", m.c_str());
@@ -236,9 +240,10 @@ int Main(int argc, char** argv) {
   std::printf("RSS growth          %+.2f MB first to last quarter (bound %.1f MB): %s\n", growth_mb,
               args.max_rss_growth_mb, memory_flat ? "flat" : "GROWING");
   std::printf(
-      "speed               %.1f fps of tracking (%.1f s), %.1f s in all with %.1f s "
-      "of rendering\n",
-      r.Fps(), r.track_seconds, total_s, render_s);
+      "speed               %.1f fps of tracking (%.1f s wall clock; %.2f ms of CPU a frame, "
+      "%.1f fps on an idle core), %.1f s in all with %.1f s of rendering\n",
+      r.Fps(), r.track_seconds, r.CpuMsPerFrame(),
+      r.CpuMsPerFrame() > 0 ? 1e3 / r.CpuMsPerFrame() : 0.0, total_s, render_s);
 
   std::ofstream out(args.json_path);
   UNSEEN_CHECK(out.good(), "{}: cannot write the results", args.json_path);

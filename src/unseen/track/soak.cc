@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ctime>
 #include <exception>
 #include <random>
 
@@ -94,13 +95,15 @@ double SoakResult::ResidentGrowthBytes() const {
 std::string SoakResult::BriefReport() const {
   return fmt::format(
       "{} frames ({} of the sequence): {} tracking, {} lost, {} re-acquisitions, {} "
-      "re-initialisations, {} within 5 cm/5 deg, {} tracking far | injected {} black, {} "
-      "noise, {} missing, {} jumps, {} replays, {} model swaps | {} NaN poses, {} exceptions "
-      "| {:.1f} fps | RSS {:.1f} -> {:.1f} MB (max {:.1f}, growth {:+.1f})",
+      "re-initialisations, {} within 5 cm/5 deg, {} tracking far ({} confident) | injected "
+      "{} black, {} noise, {} missing, {} jumps, {} replays, {} model swaps | {} NaN poses, "
+      "{} exceptions | {:.1f} fps, {:.2f} ms CPU a frame | RSS {:.1f} -> {:.1f} MB (max "
+      "{:.1f}, growth {:+.1f})",
       frames, sequence_frames, tracking_frames, lost_frames, reacquisitions, reinitializations,
-      within_5cm_5deg, tracking_far, black_frames, noise_frames, missing_frames, jumps, replays,
-      model_swaps, nan_poses, exceptions, Fps(), StartResidentBytes() / 1e6,
-      EndResidentBytes() / 1e6, MaxResidentBytes() / 1e6, ResidentGrowthBytes() / 1e6);
+      within_5cm_5deg, tracking_far, confident_far, black_frames, noise_frames, missing_frames,
+      jumps, replays, model_swaps, nan_poses, exceptions, Fps(), CpuMsPerFrame(),
+      StartResidentBytes() / 1e6, EndResidentBytes() / 1e6, MaxResidentBytes() / 1e6,
+      ResidentGrowthBytes() / 1e6);
 }
 
 SoakResult RunSoak(const SoakSource& source, const TrackerOptions& tracker_options,
@@ -187,6 +190,7 @@ SoakResult RunSoak(const SoakSource& source, const TrackerOptions& tracker_optio
     TrackResult r;
     bool thrown = false;
     Timer timer;
+    const std::clock_t cpu_start = std::clock();
     try {
       if (swap) {
         model_index = (model_index + 1) % static_cast<int>(source.models.size());
@@ -203,6 +207,7 @@ SoakResult RunSoak(const SoakSource& source, const TrackerOptions& tracker_optio
       UNSEEN_LOG_WARN("soak frame {}: the tracker threw: {}", i, e.what());
     }
     result.track_seconds += timer.ElapsedSeconds();
+    result.track_cpu_seconds += double(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     ++result.frames;
     if (thrown) {  // start again where the object is
       tracker.Initialize(source.world_from_obj[frame]);
@@ -222,6 +227,7 @@ SoakResult RunSoak(const SoakSource& source, const TrackerOptions& tracker_optio
           if (d.translation > options.far_translation_m ||
               d.rotation_rad > options.far_rotation_rad) {
             ++result.tracking_far;
+            if (r.confidence >= tracker_options.failure.lost_confidence) ++result.confident_far;
             UNSEEN_LOG_DEBUG(
                 "soak frame {} (sequence frame {}): tracking {:.1f} mm {:.2f} deg "
                 "from the truth, confidence {:.2f}",

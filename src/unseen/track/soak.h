@@ -53,7 +53,8 @@ struct SoakOptions {
   // pose, as an application's object detector would; 0 = never.
   int reinitialize_after_lost = 30;
   // A frame of the sequence reported kTracking with a pose further than this from the
-  // truth counts as `tracking_far` (a confident wrong pose); metres and radians.
+  // truth counts as `tracking_far`, and as `confident_far` (a confident wrong pose) when
+  // its confidence is at least FailureOptions::lost_confidence; metres and radians.
   double far_translation_m = 0.05;
   double far_rotation_rad = 5.0 * 3.14159265358979323846 / 180.0;
   int memory_sample_frames = 100;  // resident memory sampled every this many frames
@@ -69,13 +70,17 @@ struct SoakResult {
   int reinitializations = 0;  // re-initialised by the run (SoakOptions::reinitialize_after_lost)
   int within_5cm_5deg = 0;    // sequence frames reported kTracking within 5 cm and 5 degrees
   int tracking_far = 0;       // sequence frames reported kTracking far from the truth
-  int nan_poses = 0;          // results with a non-finite pose or confidence (must be 0)
-  int exceptions = 0;         // exceptions thrown by the tracker (must be 0)
+  // Of them, those not flagged by their confidence: the first bad frames of a loss are
+  // still reported kTracking (FailureOptions::lost_after_frames) but below lost_confidence.
+  int confident_far = 0;
+  int nan_poses = 0;   // results with a non-finite pose or confidence (must be 0)
+  int exceptions = 0;  // exceptions thrown by the tracker (must be 0)
   std::vector<std::string> exception_messages;  // the first few
   // What was injected.
   int black_frames = 0, noise_frames = 0, missing_frames = 0;
   int jumps = 0, replays = 0, model_swaps = 0;
-  double track_seconds = 0.0;  // wall clock in Track/SkipFrame/SetModel
+  double track_seconds = 0.0;      // wall clock in Track/SkipFrame/SetModel
+  double track_cpu_seconds = 0.0;  // process CPU time (all threads) in the same calls
   struct MemorySample {
     int frame = 0;
     int64_t resident_bytes = 0;
@@ -83,6 +88,7 @@ struct SoakResult {
   std::vector<MemorySample> memory;  // at frame 0, every memory_sample_frames, at the end
 
   double Fps() const { return track_seconds > 0.0 ? frames / track_seconds : 0.0; }
+  double CpuMsPerFrame() const { return frames > 0 ? 1e3 * track_cpu_seconds / frames : 0.0; }
   int64_t StartResidentBytes() const;
   int64_t EndResidentBytes() const;
   int64_t MaxResidentBytes() const;
