@@ -139,17 +139,32 @@ void RunTrack(const TrackArgs& args) {
   // Frames done, fps and ETA on stderr, when it is a terminal (logs stay clean).
   ProgressLine progress("track", frames, isatty(fileno(stderr)) != 0);
   // The next frame is read (decoded, undistorted) on another thread while this one is
-  // tracked; one read at a time, in order.
+  // tracked; one read at a time, in order. An image that cannot be read (a dropped frame,
+  // a damaged file) is a warning: its camera sits the frame out, and a frame without any
+  // image is reported lost with the held pose (Tracker::Track, SkipFrame).
   auto read = [&](int i) {
     return std::async(std::launch::async, [&sequence, index = args.first_frame + i] {
-      return sequence.ReadFrame(index);
+      return sequence.TryReadFrame(index);
     });
   };
+  int unreadable = 0;  // frames with a colour image that could not be read
   std::future<Frame> next;
   if (frames > 0) next = read(0);
   for (int i = 0; i < frames; ++i) {
     const Frame frame = next.get();
     if (i + 1 < frames) next = read(i + 1);
+    const bool any_image = std::any_of(frame.images.begin(), frame.images.end(),
+                                       [](const cv::Mat& im) { return !im.empty(); });
+    bool image_missing = false;
+    for (const FrameReadError& e : frame.errors) {
+      image_missing = image_missing || !e.depth;
+      const char* consequence = e.depth     ? "depth skipped"
+                                : any_image ? "tracked with the other cameras"
+                                            : "frame reported lost, pose held";
+      UNSEEN_LOG_WARN("track: frame {}: camera {}: {}; {}", frame.frame_id,
+                      sequence.rig().cameras[e.camera].name, e.message, consequence);
+    }
+    if (image_missing) ++unreadable;
     Timer timer;
     const TrackResult r = tracker.Track(frame);
     const double ms = timer.ElapsedMilliseconds();
@@ -184,6 +199,9 @@ void RunTrack(const TrackArgs& args) {
   std::printf("  mean ms: predict %.3f render %.3f preprocess %.3f select %.3f solve %.3f\n",
               sum_times.predict_ms / n, sum_times.render_ms / n, sum_times.preprocess_ms / n,
               sum_times.select_ms / n, sum_times.solve_ms / n);
+  if (unreadable > 0) {
+    std::printf("  %d frame(s) with an unreadable image (see the warnings)\n", unreadable);
+  }
   if (gt_frames > 0) {
     std::printf("  error vs ground truth (%d frames): translation mean %.2f mm max %.2f mm, "
                 "rotation mean %.3f deg max %.3f deg\n",
@@ -196,6 +214,7 @@ void RunTrack(const TrackArgs& args) {
     j["cameras"] = ncam;
     j["fps"] = fps;
     j["lost_frames"] = lost;
+    j["unreadable_frames"] = unreadable;
     j["mean_ms"] = {{"predict", sum_times.predict_ms / n}, {"render", sum_times.render_ms / n},
                     {"preprocess", sum_times.preprocess_ms / n},
                     {"select", sum_times.select_ms / n}, {"solve", sum_times.solve_ms / n},

@@ -13,6 +13,7 @@
 
 #include "unseen/io/sequence.h"
 #include "unseen/util/error.h"
+#include "unseen/util/logging.h"
 #include "unseen/util/progress.h"
 
 namespace unseen {
@@ -213,9 +214,16 @@ int WriteOverlay(const Sequence& sequence, const std::vector<PoseRecord>& poses,
   ProgressLine progress("overlay", sequence.num_frames(), options.show_progress);
   const bool has_gt = sequence.has_ground_truth();
   for (int i = 0; i < sequence.num_frames(); ++i) {
-    const Frame frame = sequence.ReadFrame(i);
+    const Frame frame = sequence.TryReadFrame(i);
     cv::Mat image;
-    frame.images.at(camera_index).convertTo(image, CV_8UC3, 255.0);
+    if (frame.images.at(camera_index).empty()) {  // a dropped or damaged frame: black
+      for (const FrameReadError& e : frame.errors) {
+        if (e.camera == camera_index && !e.depth) UNSEEN_LOG_WARN("overlay: {}", e.message);
+      }
+      image = cv::Mat::zeros(camera.intrinsics.height, camera.intrinsics.width, CV_8UC3);
+    } else {
+      frame.images[camera_index].convertTo(image, CV_8UC3, 255.0);
+    }
     OverlayFrame what;
     what.frame = frame.frame_id;
     auto it = by_frame.find(frame.frame_id);

@@ -77,7 +77,7 @@ class OverlaySink {
 
 // Writes the overlay of every frame of `sequence` (camera `camera_index` of its rig) with
 // the poses of `poses` (matched by frame id) to `out_path` (see OverlaySink); fps <= 0 uses
-// the sequence's. Returns the number of frames written. Throws unseen::Error when the
+// the sequence's. A frame whose image cannot be read is drawn over black, with a warning. Returns the number of frames written. Throws unseen::Error when the
 // sequence has no model, the camera index is out of range, or the output cannot be written.
 int WriteOverlay(const Sequence& sequence, const std::vector<PoseRecord>& poses, int camera_index,
                  const std::string& out_path, double fps = 0.0, const OverlayOptions& options = {});

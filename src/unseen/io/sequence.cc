@@ -216,31 +216,54 @@ CameraSource ReadBopCamera(const std::string& name, const fs::path& dir, bool st
     source.world_from_cam = first_extrinsics->Inverse();
   }
 
-  // Images: rgb/<id>.png|.jpg, one per frame of scene_camera.json.
+  // Images: rgb/<id>.png|.jpg, one per frame of scene_camera.json. A frame without its
+  // file (a dropped frame) gets the path it should have had: reading it fails, naming it.
   const fs::path rgb_dir = dir / "rgb";
   UNSEEN_CHECK(fs::is_directory(rgb_dir), "{}: image folder not found", rgb_dir.string());
   const std::map<int, std::string> images = ListFrameFiles(rgb_dir, {".png", ".jpg", ".jpeg"});
+  std::vector<int> missing;
+  std::string first_present;
   for (int id : *frame_ids) {
     const auto it = images.find(id);
-    UNSEEN_CHECK(it != images.end(),
-                 "{}: no image for frame {} of scene_camera.json (expected {}.png or {}.jpg)",
-                 rgb_dir.string(), id, bop::FrameName(id), bop::FrameName(id));
+    if (it == images.end()) {
+      missing.push_back(id);
+      source.image_paths.push_back((rgb_dir / (bop::FrameName(id) + ".png")).string());
+      continue;
+    }
+    if (first_present.empty()) first_present = it->second;
     source.image_paths.push_back(it->second);
+  }
+  UNSEEN_CHECK(!first_present.empty(),
+               "{}: no image for frame {} of scene_camera.json (expected {}.png or {}.jpg)",
+               rgb_dir.string(), frame_ids->front(), bop::FrameName(frame_ids->front()),
+               bop::FrameName(frame_ids->front()));
+  if (!missing.empty()) {
+    UNSEEN_LOG_WARN(
+        "{}: no image for {} of the {} frames of scene_camera.json (frame{} {}{}); "
+        "they will be read as missing",
+        rgb_dir.string(), missing.size(), frame_ids->size(), missing.size() > 1 ? "s" : "",
+        fmt::join(missing.begin(), missing.begin() + std::min<size_t>(missing.size(), 5), ", "),
+        missing.size() > 5 ? ", ..." : "");
   }
   const fs::path depth_dir = dir / "depth";
   if (fs::is_directory(depth_dir)) {
     const std::map<int, std::string> depths = ListFrameFiles(depth_dir, {".png"});
+    int missing_depth = 0;
     for (int id : *frame_ids) {
       const auto it = depths.find(id);
-      UNSEEN_CHECK(it != depths.end(), "{}: no depth image for frame {} (expected {}.png)",
-                   depth_dir.string(), id, bop::FrameName(id));
-      source.depth_paths.push_back(it->second);
+      if (it == depths.end()) ++missing_depth;
+      source.depth_paths.push_back(
+          it != depths.end() ? it->second : (depth_dir / (bop::FrameName(id) + ".png")).string());
+    }
+    if (missing_depth > 0) {
+      UNSEEN_LOG_WARN("{}: no depth image for {} of the {} frames; they will be read as missing",
+                      depth_dir.string(), missing_depth, frame_ids->size());
     }
   }
 
-  // Image size from the first image.
-  const cv::Mat first_image = cv::imread(source.image_paths.front(), cv::IMREAD_UNCHANGED);
-  UNSEEN_CHECK(!first_image.empty(), "{}: not a readable image", source.image_paths.front());
+  // Image size from the first image present.
+  const cv::Mat first_image = cv::imread(first_present, cv::IMREAD_UNCHANGED);
+  UNSEEN_CHECK(!first_image.empty(), "{}: not a readable image", first_present);
   source.intrinsics.width = first_image.cols;
   source.intrinsics.height = first_image.rows;
   source.intrinsics.Check(camera_file);
@@ -342,6 +365,10 @@ struct Sequence::Impl {
     UNSEEN_CHECK(index >= 0 && index < static_cast<int>(frame_ids.size()),
                  "{}: frame index {} out of range [0, {})", path, index, frame_ids.size());
   }
+
+  // Frame `index` of the selected cameras. `strict`: an image that cannot be read throws;
+  // otherwise it is left empty and described in Frame::errors.
+  Frame Read(int index, bool strict) const;
 
   cv::Mat ReadVideoFrame(int index) const {
     std::lock_guard<std::mutex> lock(video_mutex);
@@ -578,39 +605,62 @@ int Sequence::frame_id(int index) const {
   return impl_->frame_ids[index];
 }
 
-Frame Sequence::ReadFrame(int index) const {
-  impl_->CheckIndex(index);
+Frame Sequence::Impl::Read(int index, bool strict) const {
+  CheckIndex(index);
   Frame frame;
-  frame.frame_id = impl_->frame_ids[index];
-  frame.time_s = frame.frame_id / impl_->fps;
-  const bool depth = has_depth();
-  for (int source_index : impl_->selected) {
-    const CameraSource& source = impl_->sources[source_index];
-    cv::Mat image;
-    if (impl_->kind == Kind::kVideo) {
-      image = impl_->ReadVideoFrame(index);
-      source.CheckSize(image, fmt::format("{} frame {}", impl_->path, index));
-    } else {
-      image = LoadColorImage(source.image_paths[index]);
-      source.CheckSize(image, source.image_paths[index]);
+  frame.frame_id = frame_ids[index];
+  frame.time_s = frame.frame_id / fps;
+  const bool depth = std::any_of(selected.begin(), selected.end(),
+                                 [&](int i) { return !sources[i].depth_paths.empty(); });
+  // Runs `read`; when not strict, a failure is recorded and gives an empty image.
+  auto attempt = [&](int camera, bool is_depth, const std::string& file, auto&& read) {
+    if (strict) return read();
+    try {
+      return read();
+    } catch (const Error& e) {
+      frame.errors.push_back({camera, is_depth, file, e.what()});
+    } catch (const cv::Exception& e) {  // a decoder that gave up on a damaged file
+      frame.errors.push_back({camera, is_depth, file, fmt::format("{}: {}", file, e.what())});
     }
-    frame.images.push_back(source.Undistort(image, cv::INTER_LINEAR));
+    return cv::Mat();
+  };
+  for (int c = 0; c < static_cast<int>(selected.size()); ++c) {
+    const CameraSource& source = sources[selected[c]];
+    const std::string file = kind == Kind::kVideo ? fmt::format("{} frame {}", path, index)
+                                                  : source.image_paths[index];
+    frame.images.push_back(attempt(c, false, file, [&] {
+      cv::Mat image;
+      if (kind == Kind::kVideo) {
+        image = ReadVideoFrame(index);
+      } else {
+        image = LoadColorImage(file);
+      }
+      source.CheckSize(image, file);
+      return source.Undistort(image, cv::INTER_LINEAR);
+    }));
     if (!depth) continue;
     if (source.depth_paths.empty()) {
       frame.depths.emplace_back();
       continue;
     }
-    const std::string& file = source.depth_paths[index];
-    const cv::Mat raw = cv::imread(file, cv::IMREAD_ANYDEPTH);
-    UNSEEN_CHECK(!raw.empty(), "{}: depth image missing or unreadable", file);
-    UNSEEN_CHECK(raw.type() == CV_16UC1, "{}: depth image must be 16-bit single channel", file);
-    source.CheckSize(raw, file);
-    cv::Mat depth_m;
-    raw.convertTo(depth_m, CV_32F, source.depth_scales[index] * 1e-3);
-    frame.depths.push_back(source.Undistort(depth_m, cv::INTER_NEAREST));
+    const std::string& depth_file = source.depth_paths[index];
+    frame.depths.push_back(attempt(c, true, depth_file, [&] {
+      const cv::Mat raw = cv::imread(depth_file, cv::IMREAD_ANYDEPTH);
+      UNSEEN_CHECK(!raw.empty(), "{}: depth image missing or unreadable", depth_file);
+      UNSEEN_CHECK(raw.type() == CV_16UC1, "{}: depth image must be 16-bit single channel",
+                   depth_file);
+      source.CheckSize(raw, depth_file);
+      cv::Mat depth_m;
+      raw.convertTo(depth_m, CV_32F, source.depth_scales[index] * 1e-3);
+      return source.Undistort(depth_m, cv::INTER_NEAREST);
+    }));
   }
   return frame;
 }
+
+Frame Sequence::ReadFrame(int index) const { return impl_->Read(index, true); }
+
+Frame Sequence::TryReadFrame(int index) const { return impl_->Read(index, false); }
 
 void Sequence::SelectCameras(const std::vector<std::string>& names) {
   UNSEEN_CHECK(!names.empty(), "{}: no cameras selected", impl_->path);

@@ -18,6 +18,14 @@
 
 namespace unseen {
 
+// An image of a frame that could not be read (Sequence::TryReadFrame).
+struct FrameReadError {
+  int camera = 0;       // rig camera index
+  bool depth = false;   // the depth image (else the colour image)
+  std::string file;     // the image file, or "<video> frame <index>"
+  std::string message;  // what went wrong, naming the file
+};
+
 // One synchronized frame of the rig.
 struct Frame {
   int frame_id = 0;
@@ -25,6 +33,9 @@ struct Frame {
   std::vector<cv::Mat> images;  // per rig camera: CV_32FC3 BGR [0, 1], undistorted
   std::vector<cv::Mat> depths;  // per rig camera: CV_32FC1 metres (0 = no measurement),
                                 // undistorted; empty when the sequence has no depth
+  // TryReadFrame only: the images that could not be read, whose entries in `images` or
+  // `depths` are empty. Empty for a complete frame.
+  std::vector<FrameReadError> errors;
 };
 
 class Sequence {
@@ -40,9 +51,11 @@ class Sequence {
   //  * Intrinsics must be the same in every frame of scene_camera.json (unseen assumes
   //    fixed intrinsics); so must the extrinsics of a rig. A plain BOP scene whose camera
   //    moves uses its camera frame as the world frame (with a warning).
-  //  * Frame ids come from scene_camera.json; every frame needs rgb/<id>.png|.jpg (and
-  //    depth/<id>.png when the camera has a depth folder). The image size is read from the
-  //    first image; ReadFrame checks every image against it.
+  //  * Frame ids come from scene_camera.json; each frame's image is rgb/<id>.png|.jpg (and
+  //    depth/<id>.png when the camera has a depth folder). A frame whose file is absent
+  //    (a dropped frame) is a warning here and a read error of that frame; a camera with
+  //    no image at all is an error. The image size is read from the first image present;
+  //    ReadFrame checks every image against it.
   //  * The object id is sequence.json's object.obj_id, else the first obj_id of the
   //    ground truth.
   static Sequence Open(const std::string& path);
@@ -76,6 +89,11 @@ class Sequence {
   // Loads frame `index` (0-based position, not id). Throws unseen::Error naming the image
   // file when it is missing, unreadable or of the wrong size.
   Frame ReadFrame(int index) const;
+  // The same for a stream that must go on: an image that is missing, unreadable (e.g. a
+  // truncated PNG) or of the wrong size leaves that camera's entry of Frame::images (or
+  // Frame::depths) empty and is listed in Frame::errors with the message ReadFrame would
+  // throw; the other cameras are read as usual. Throws only for an index out of range.
+  Frame TryReadFrame(int index) const;
   // Restricts the rig to the named cameras (in that order). Throws for an unknown name.
   // The reference camera stays the same camera when selected, else becomes the first.
   void SelectCameras(const std::vector<std::string>& names);

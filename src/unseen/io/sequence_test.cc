@@ -298,6 +298,91 @@ TEST(Sequence, ReadsJpegImages) {
   EXPECT_EQ(seq.ReadFrame(0).images[0].cols, 40);
 }
 
+// --- Faults in the middle of a stream: ReadFrame throws, TryReadFrame goes on ----------
+
+// Cuts `file` to `bytes` bytes, as an interrupted copy leaves it.
+void Truncate(const fs::path& file, std::uintmax_t bytes) {
+  ASSERT_GT(fs::file_size(file), bytes);
+  fs::resize_file(file, bytes);
+}
+
+TEST(SequenceFaults, DroppedImageIsReadAsMissing) {
+  const fs::path dir = TestDir();
+  TestSequence t;
+  t.Write(dir);
+  fs::remove(dir / "cam1" / "rgb" / "000002.png");
+  const Sequence seq = Sequence::Open(dir.string());  // a warning, not an error
+  EXPECT_EQ(seq.num_frames(), 3);
+  ExpectError([&] { seq.ReadFrame(2); }, {"cam1/rgb/000002.png", "not found"});
+  const Frame frame = seq.TryReadFrame(2);
+  EXPECT_EQ(frame.frame_id, 2);
+  ASSERT_EQ(frame.images.size(), 2u);
+  EXPECT_FALSE(frame.images[0].empty());
+  EXPECT_TRUE(frame.images[1].empty());
+  ASSERT_EQ(frame.errors.size(), 1u);
+  EXPECT_EQ(frame.errors[0].camera, 1);
+  EXPECT_FALSE(frame.errors[0].depth);
+  EXPECT_THAT(frame.errors[0].file, HasSubstr("cam1/rgb/000002.png"));
+  EXPECT_THAT(frame.errors[0].message, HasSubstr("000002.png"));
+  // The neighbours are complete.
+  EXPECT_TRUE(seq.TryReadFrame(1).errors.empty());
+  EXPECT_FALSE(seq.TryReadFrame(1).images[1].empty());
+}
+
+TEST(SequenceFaults, TruncatedImageIsReadAsMissing) {
+  const fs::path dir = TestDir();
+  TestSequence t;
+  t.width = 160;  // large enough that half the file cuts into the pixel data
+  t.height = 120;
+  for (json& cam : t.scene_camera) {
+    for (auto& [key, entry] : cam.items()) entry["cam_K"] = {200.0, 0, 79.5, 0, 200.0, 59.5, 0, 0, 1};
+  }
+  t.Write(dir);
+  const fs::path file = dir / "cam0" / "rgb" / "000001.png";
+  Truncate(file, fs::file_size(file) / 2);
+  const Sequence seq = Sequence::Open(dir.string());
+  ExpectError([&] { seq.ReadFrame(1); }, {"cam0/rgb/000001.png", "not a readable image"});
+  const Frame frame = seq.TryReadFrame(1);
+  EXPECT_TRUE(frame.images[0].empty());
+  ASSERT_FALSE(frame.images[1].empty());
+  EXPECT_EQ(frame.images[1].cols, 160);
+  ASSERT_EQ(frame.errors.size(), 1u);
+  EXPECT_EQ(frame.errors[0].camera, 0);
+  EXPECT_THAT(frame.errors[0].message, HasSubstr("000001.png"));
+  // An empty file is as unreadable.
+  Truncate(file, 0);
+  EXPECT_TRUE(seq.TryReadFrame(1).images[0].empty());
+  EXPECT_EQ(seq.TryReadFrame(1).errors.size(), 1u);
+  EXPECT_TRUE(seq.TryReadFrame(2).errors.empty());
+}
+
+TEST(SequenceFaults, WrongSizeAndMissingDepthAreReadAsMissing) {
+  const fs::path dir = TestDir();
+  TestSequence t;
+  t.Write(dir);
+  cv::imwrite((dir / "cam1" / "rgb" / "000002.png").string(), TestImage(41, 30, 2, 1));
+  fs::create_directories(dir / "cam0" / "depth");
+  for (int f : {0, 2}) {  // frame 1's depth dropped
+    cv::imwrite((dir / "cam0" / "depth" / fmt::format("{:06d}.png", f)).string(),
+                cv::Mat(30, 40, CV_16UC1, cv::Scalar(1000)));
+  }
+  const Sequence seq = Sequence::Open(dir.string());
+  const Frame size_fault = seq.TryReadFrame(2);
+  EXPECT_TRUE(size_fault.images[1].empty());
+  EXPECT_FALSE(size_fault.images[0].empty());
+  EXPECT_FALSE(size_fault.depths[0].empty());
+  ASSERT_EQ(size_fault.errors.size(), 1u);
+  EXPECT_THAT(size_fault.errors[0].message, HasSubstr("41x30"));
+  const Frame depth_fault = seq.TryReadFrame(1);
+  EXPECT_FALSE(depth_fault.images[0].empty());  // the colour image is still there
+  EXPECT_TRUE(depth_fault.depths[0].empty());
+  ASSERT_EQ(depth_fault.errors.size(), 1u);
+  EXPECT_TRUE(depth_fault.errors[0].depth);
+  EXPECT_THAT(depth_fault.errors[0].file, HasSubstr("cam0/depth/000001.png"));
+  ExpectError([&] { seq.ReadFrame(1); }, {"cam0/depth/000001.png"});
+  ExpectError([&] { seq.TryReadFrame(3); }, {"frame index 3"});  // a broken contract
+}
+
 // --- Bad input: each throws unseen::Error naming the file and the field ---------------
 
 TEST(SequenceBadInput, MissingFolder) {
@@ -406,12 +491,12 @@ TEST(SequenceBadInput, FrameIdsDiffer) {
   ExpectError([&] { Sequence::Open(dir.string()); }, {"cam1/scene_camera.json", "has frame 3"});
 }
 
-TEST(SequenceBadInput, MissingImage) {
+TEST(SequenceBadInput, CameraWithoutAnyImage) {
   const fs::path dir = TestDir();
   TestSequence t;
   t.Write(dir);
-  fs::remove(dir / "cam1" / "rgb" / "000002.png");
-  ExpectError([&] { Sequence::Open(dir.string()); }, {"cam1/rgb", "frame 2", "000002.png"});
+  for (int f = 0; f < 3; ++f) fs::remove(dir / "cam1" / "rgb" / fmt::format("{:06d}.png", f));
+  ExpectError([&] { Sequence::Open(dir.string()); }, {"cam1/rgb", "frame 0", "000000.png"});
 }
 
 TEST(SequenceBadInput, WrongImageSize) {

@@ -91,6 +91,7 @@ CameraWindow PrepareWindow(const cv::Mat& image, const RigCamera& rig_camera,
                            int level, const ReacquisitionOptions& options,
                            const PreprocessOptions& preprocess) {
   CameraWindow w;
+  if (image.empty()) return w;  // no image from this camera this frame
   const PinholeCamera& cam0 = rig_camera.intrinsics;
   w.camera = cam0.PyramidLevel(level);
   w.cam_from_world = rig_camera.cam_from_world();
@@ -412,6 +413,10 @@ std::vector<cv::Mat> Downsampled(const std::vector<cv::Mat>& images, int level) 
   if (level == 0) return images;
   std::vector<cv::Mat> out;
   for (const cv::Mat& im : images) {
+    if (im.empty()) {  // a camera without an image stays without one
+      out.emplace_back();
+      continue;
+    }
     out.push_back(DownsampledRegion(im, level, LevelRect(im.cols, im.rows, level)));
   }
   return out;

@@ -156,10 +156,10 @@ void Tracker::SetModel(Mesh model) {
                                     !options_.region.enabled);
   model_ = std::make_shared<const Mesh>(std::move(model));
   reacquisition_.reset();
-  // What was learnt about the old model's appearance does not hold for the new one; the
-  // next frame learns it again from its start.
-  for (ColorHistograms& h : histograms_) h.Reset();
-  learn_from_start_ = true;
+  // What was learnt about the old model's fit (its residual floor, the search's caches) does
+  // not hold for the new one. The colour statistics are the object's and its
+  // surroundings', not the model's: they stay.
+  residual_reference_px_ = 0.0;
 }
 
 Reacquisition& Tracker::Reacquirer() {
@@ -244,7 +244,7 @@ Frame Tracker::CheckFrame(const Frame& frame) const {
     const cv::Mat& im = images[c];
     const PinholeCamera& cam = rig_.cameras[c].intrinsics;
     const std::string& name = rig_.cameras[c].name;
-    UNSEEN_CHECK(!im.empty(), "Tracker::Track: image of camera '{}' is empty", name);
+    if (im.empty()) continue;  // no frame from this camera: it sits this one out
     UNSEEN_CHECK(im.cols == cam.width && im.rows == cam.height,
                  "Tracker::Track: image of camera '{}' is {}x{}, the camera is {}x{}", name, im.cols,
                  im.rows, cam.width, cam.height);
@@ -414,6 +414,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
     auto place_region = [&](int c, const Rigid3d& world_from_obj) {
       CameraWork& w = *work_[c];
       w.active = false;
+      if (images[c].empty()) return;  // this camera has no image this frame
       const Rigid3d cam_from_obj = cam_from_world_[c] * world_from_obj;
       const std::optional<PixelRect> rect =
           coarsest ? w.camera.SphereRect(cam_from_obj * sphere_centre_, sphere_radius_)
@@ -640,6 +641,10 @@ TrackResult Tracker::Track(const Frame& input_frame) {
   UNSEEN_CHECK(initialized_, "Tracker::Track called before Initialize()");
   Timer total;
   const Frame frame = CheckFrame(input_frame);
+  if (std::all_of(frame.images.begin(), frame.images.end(),
+                  [](const cv::Mat& im) { return im.empty(); })) {
+    return SkipFrame();
+  }
   const FailureOptions& f = options_.failure;
 
   Timer timer;
@@ -705,12 +710,39 @@ TrackResult Tracker::Track(const Frame& input_frame) {
     }
   }
   r.status = status_;
-  if (status_ == TrackStatus::kLost) r.world_from_obj = last_good_;
+  if (status_ == TrackStatus::kLost) {
+    r.world_from_obj = last_good_;
+  } else if (r.confidence < f.lost_confidence) {
+    // A bad frame within the hysteresis (lost_after_frames): its alignment is not to be
+    // believed (a frame of noise can drag it anywhere); the motion model's guess is.
+    r.world_from_obj = predicted;
+  }
   if (!r.world_from_obj.IsValid()) {  // never report NaN
     r.world_from_obj = last_good_;
     r.confidence = 0.0;
   }
   r.summary.times.predict_ms = predict_ms;
+  r.summary.times.total_ms = total.ElapsedMilliseconds();
+  return r;
+}
+
+TrackResult Tracker::SkipFrame() {
+  UNSEEN_CHECK(initialized_, "Tracker::SkipFrame called before Initialize()");
+  Timer total;
+  if (status_ == TrackStatus::kTracking) {
+    if (++bad_frames_ >= options_.failure.lost_after_frames) {
+      status_ = TrackStatus::kLost;
+      predictor_->Reset(last_good_);
+    } else {
+      predictor_->Predict(options_.frame_interval_s);  // the object moved on meanwhile
+    }
+    // The next frame is a frame interval further from the last correction.
+    recent_correction_px_ = std::numeric_limits<double>::infinity();
+  }
+  TrackResult r;
+  r.world_from_obj = last_good_;
+  r.status = TrackStatus::kLost;
+  r.confidence = 0.0;
   r.summary.times.total_ms = total.ElapsedMilliseconds();
   return r;
 }

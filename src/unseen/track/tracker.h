@@ -92,7 +92,9 @@ class Tracker {
   Tracker(const Rig& rig, Mesh model, const TrackerOptions& options = {});
   ~Tracker();
 
-  // Replaces the model between frames (e.g. by the on-line modeller); the pose is kept.
+  // Replaces the model between frames (e.g. by the on-line modeller); the pose, the motion
+  // and the colour statistics of object and surroundings are kept, what was learnt about
+  // the old model's fit (residual floor, re-acquisition caches) is reset.
   void SetModel(Mesh model);
   // Starts tracking at `world_from_obj` (metres). Throws for a non-finite pose.
   void Initialize(const Rigid3d& world_from_obj);
@@ -103,11 +105,21 @@ class Tracker {
   // [0, 1] (CV_8UC3 is converted) of that camera's size, and optionally one depth image
   // per camera (Frame::depths: CV_32FC1 metres, 0 = no measurement, of that camera's size;
   // an empty Mat for a camera without depth), which the depth modality uses
-  // (TrackerOptions::depth). Throws unseen::Error before Initialize(), for a wrong number
-  // of images or a wrong size/type. An object out of view is reported as lost, never as NaN.
+  // (TrackerOptions::depth). An empty colour image means that camera delivered no frame
+  // this time: the others are tracked alone (the status and confidence come from them); no
+  // image at all is SkipFrame(). Throws unseen::Error before Initialize(), for a wrong
+  // number of images or a wrong size/type. An object out of view is reported as lost,
+  // never as NaN.
   TrackResult Track(const Frame& frame);
   // The same for colour images alone.
   TrackResult Track(const std::vector<cv::Mat>& images_per_camera);
+  // A frame time with no image from any camera (a dropped or unreadable frame). Reported
+  // as kLost with the last good pose and confidence 0; the tracking state treats it as a
+  // bad frame: the motion predictor moves on by one frame interval, the next frame uses
+  // the full pyramid, and FailureOptions::lost_after_frames such frames (or bad ones) in
+  // a row make the tracker lost, so that it searches from the last good pose. Throws
+  // before Initialize().
+  TrackResult SkipFrame();
 
   // Aligns the model to the frame starting from `world_from_obj` without touching the
   // tracking state (no prediction, no status): the multi-scale render-solve loop and the

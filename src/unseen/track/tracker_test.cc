@@ -390,7 +390,10 @@ TEST_F(TrackerScene, UntexturedModelTracksFromMaterialColour) {
   plain.uvs.clear();
   const cv::Mat image =
       Synthesize(plain, rig_.cameras[0], truth_, Background(rig_.cameras[0].intrinsics, 1));
+  // No appearance: the silhouette against the colour statistics learnt on the first frame.
   Tracker tracker(rig_, plain);
+  tracker.Initialize(truth_);
+  tracker.Track({image});
   Vector6d d;
   d << 0.004, -0.003, 0.0, 0.0, 0.0, 0.0;
   const TrackResult r = tracker.Align({image}, Perturb(truth_, d));

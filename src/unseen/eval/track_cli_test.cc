@@ -1,0 +1,134 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// End-to-end tests of `unseen track` on a short synthetic sequence with faults in the middle
+// of the stream, running the built binary (UNSEEN_CLI): the command warns, reports those
+// frames lost and goes on.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "unseen/io/pose_stream.h"
+#include "unseen/io/sequence.h"
+
+namespace unseen {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string TempPath(const std::string& name) {
+  return (fs::temp_directory_path() / ("unseen_track_cli_test_" + name)).string();
+}
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+// Runs `unseen <args>`, capturing stdout and stderr.
+RunResult RunCli(const std::string& args) {
+  const std::string out = TempPath("stdout.txt"), err = TempPath("stderr.txt");
+  const std::string command = fmt::format("'{}' {} > '{}' 2> '{}'", UNSEEN_CLI, args, out, err);
+  const int status = std::system(command.c_str());
+  RunResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = ReadText(out);
+  r.err = ReadText(err);
+  return r;
+}
+
+std::string RgbFile(const std::string& dir, int frame) {
+  return (fs::path(dir) / "cam0" / "rgb" / fmt::format("{:06d}.png", frame)).string();
+}
+
+// The README demo scene's first 12 frames (the cube over clutter), rendered by `unseen synth`.
+class TrackCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = TempPath("seq");
+    fs::remove_all(dir_);
+    const RunResult r = RunCli(
+        fmt::format("-q synth '{}/scenes/demo.yaml' '{}' --frames 12", UNSEEN_SOURCE_DIR, dir_));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string dir_;
+};
+
+TEST_F(TrackCli, UnreadableAndMissingFramesAreReportedLostAndTrackingGoesOn) {
+  // Frame 4 cut short (an interrupted copy), frame 7 gone.
+  fs::resize_file(RgbFile(dir_, 4), fs::file_size(RgbFile(dir_, 4)) / 3);
+  fs::remove(RgbFile(dir_, 7));
+  const std::string poses = TempPath("poses.csv"), stats = TempPath("stats.json");
+  const std::string overlay = TempPath("overlay");
+  fs::remove_all(overlay);
+  const RunResult r =
+      RunCli(fmt::format("track '{}' --init gt --out '{}' --stats '{}' "
+                         "--overlay '{}'",
+                         dir_, poses, stats, overlay));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // One warning per bad file, naming it.
+  EXPECT_NE(r.err.find("000004.png"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("000007.png"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("frame reported lost"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("2 frame(s) with an unreadable image"), std::string::npos) << r.out;
+
+  const std::vector<PoseRecord> records = ReadPoseStream(poses);
+  ASSERT_EQ(records.size(), 12u);
+  for (const PoseRecord& p : records) {
+    EXPECT_TRUE(p.world_from_obj.IsValid()) << "frame " << p.frame;
+    EXPECT_TRUE(std::isfinite(p.confidence)) << "frame " << p.frame;
+  }
+  for (int bad : {4, 7}) {
+    EXPECT_EQ(records[bad].frame, bad);
+    EXPECT_EQ(records[bad].status, TrackStatus::kLost) << "frame " << bad;
+    EXPECT_EQ(records[bad].confidence, 0.0) << "frame " << bad;
+  }
+  // The held pose is the one of the frame before (tracked; the cube is in plain view).
+  EXPECT_EQ(records[3].status, TrackStatus::kTracking);
+  EXPECT_LT(Difference(records[4].world_from_obj, records[3].world_from_obj).translation, 1e-9);
+  // Tracking went on after each gap.
+  EXPECT_EQ(records[5].status, TrackStatus::kTracking);
+  EXPECT_EQ(records[8].status, TrackStatus::kTracking);
+  EXPECT_EQ(records[11].status, TrackStatus::kTracking);
+  const Sequence sequence = Sequence::Open(dir_);
+  EXPECT_LT(Difference(records[11].world_from_obj, *sequence.GroundTruth(11)).translation, 0.005);
+
+  const nlohmann::json j = nlohmann::json::parse(ReadText(stats));
+  EXPECT_EQ(j["frames"].get<int>(), 12);
+  EXPECT_EQ(j["unreadable_frames"].get<int>(), 2);
+  EXPECT_GE(j["lost_frames"].get<int>(), 2);
+  // The overlay has every frame, the bad ones over black.
+  int pngs = 0;
+  for (const auto& entry : fs::directory_iterator(overlay))
+    pngs += entry.path().extension() == ".png";
+  EXPECT_EQ(pngs, 12);
+  fs::remove(poses);
+  fs::remove(stats);
+  fs::remove_all(overlay);
+}
+
+TEST_F(TrackCli, SequenceWithoutAnyImageFailsClearly) {
+  // Without a first image there is nothing to read the image size from.
+  for (int f = 0; f < 12; ++f) fs::remove(RgbFile(dir_, f));
+  const RunResult r = RunCli(fmt::format("track '{}' --init gt", dir_));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("cam0/rgb"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("000000.png"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace unseen

@@ -1,0 +1,22 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/util/memory.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+
+namespace unseen {
+
+int64_t ResidentMemoryBytes() {
+  // statm: size resident shared text lib data dt, in pages.
+  std::FILE* file = std::fopen("/proc/self/statm", "r");
+  if (!file) return 0;
+  long long size_pages = 0, resident_pages = 0;
+  const int read = std::fscanf(file, "%lld %lld", &size_pages, &resident_pages);
+  std::fclose(file);
+  if (read != 2) return 0;
+  const long page = sysconf(_SC_PAGESIZE);
+  return page > 0 ? static_cast<int64_t>(resident_pages) * page : 0;
+}
+
+}  // namespace unseen
