@@ -115,6 +115,30 @@ TEST_F(ModalityScene, RegionAloneTracksAnUntexturedModel) {
   EXPECT_GT(r.confidence, 0.5) << r.BriefReport();
 }
 
+TEST_F(ModalityScene, AModelWhoseColoursDisagreeTracksByItsSilhouette) {
+  // The camera sees the flat cube; the model carries the lettered texture, whose colours
+  // are nothing like it. The first frame finds the texture does not fit and drops the
+  // photometric modality instead of being dragged away by it.
+  const Mesh textured = MakeLetteredCube(0.096, 64);
+  Tracker tracker(rig_, textured);
+  EXPECT_TRUE(tracker.photometric_in_use());
+  tracker.Initialize(truth_);
+  Frame colour_only;
+  colour_only.images = frame_.images;
+  TrackResult r = tracker.Track(colour_only);
+  EXPECT_FALSE(tracker.photometric_in_use()) << r.BriefReport();
+  for (int k = 0; k < 3; ++k) r = tracker.Track(colour_only);
+  EXPECT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
+  const PoseDifference e = Difference(r.world_from_obj, truth_);
+  EXPECT_LT(e.translation, 0.004) << r.BriefReport();
+  EXPECT_LT(e.rotation_rad, 1.0 * kDeg) << r.BriefReport();
+  // The textured model on its own images keeps the photometric modality.
+  Tracker matching(rig_, textured);
+  matching.Initialize(truth_);
+  matching.Track({testing::RenderOverBackground(textured, rig_.cameras[0], truth_, background_)});
+  EXPECT_TRUE(matching.photometric_in_use());
+}
+
 TEST_F(ModalityScene, AllModalitiesTogether) {
   const Mesh textured = MakeLetteredCube(0.096, 128);
   Frame frame;

@@ -27,6 +27,8 @@ void RegionModalityOptions::Check() const {
   UNSEEN_CHECK(min_contrast >= 0.0 && min_contrast < 1.0, "region.min_contrast {} must be in [0, 1)",
                min_contrast);
   residual.Check("region");
+  UNSEEN_CHECK(min_start_edge_share >= 0.0 && min_start_edge_share <= 1.0,
+               "region.min_start_edge_share {} must be in [0, 1]", min_start_edge_share);
   UNSEEN_CHECK(0.0 <= bad_agreement && bad_agreement < good_agreement && good_agreement <= 1.0,
                "region: need 0 <= bad_agreement ({}) < good_agreement ({}) <= 1", bad_agreement,
                good_agreement);
@@ -107,6 +109,7 @@ RegionCounts& RegionCounts::operator+=(const RegionCounts& o) {
   used += o.used;
   pixels += o.pixels;
   agreeing += o.agreeing;
+  edge_lines += o.edge_lines;
   return *this;
 }
 
@@ -218,10 +221,22 @@ void AddRegionEquations(const RegionModalityInput& in, const RegionModalityOptio
     constexpr int kMinSide = 2;
     if (clipped || half - first < kMinSide || last - half + 1 < kMinSide) continue;
     ++c.lines;
+    const float* previous = nullptr;
+    float largest_step = -1.0f;
+    int step_at = 0;  // boundary d between samples d - 1 and d
     for (int k = first; k <= last; ++k) {
       int sx, sy;
       sample_pixel(k, &sx, &sy);
       const float* bgr = image.ptr<float>(sy) + 3 * sx;
+      if (previous) {
+        const float step = std::abs(bgr[0] - previous[0]) + std::abs(bgr[1] - previous[1]) +
+                           std::abs(bgr[2] - previous[2]);
+        if (step > largest_step) {
+          largest_step = step;
+          step_at = k;
+        }
+      }
+      previous = bgr;
       posterior[k] = solve ? histograms->Foreground(bgr) : 0.5f;
       if (learn) {
         const float s = float(k - half) + 0.5f;
@@ -229,6 +244,7 @@ void AddRegionEquations(const RegionModalityInput& in, const RegionModalityOptio
         if (s > options.learn_margin_px) histograms->Count(bgr, false);
       }
     }
+    if (largest_step > 0.0f && std::abs(step_at - half) <= 1) ++c.edge_lines;
     if (!solve) continue;
     // Agreement of the pixels away from the contour with the side they are on.
     double contrast = 0.0;

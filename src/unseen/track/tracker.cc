@@ -276,9 +276,9 @@ Frame Tracker::CheckFrame(const Frame& frame) const {
   return out;
 }
 
-double Tracker::Confidence(const SolveSummary& s) const {
+double Tracker::PhotometricFit(const SolveSummary& s) const {
   const FailureOptions& f = options_.failure;
-  if (s.equations < f.min_pixels) return 0.0;
+  if (s.counts.used < f.min_pixels) return 0.0;
   const double support_term = std::max(Ramp(s.share, f.min_share, f.good_share),
                                        Ramp(double(s.counts.used), f.min_used_px, f.good_used_px));
   double residual_term = Ramp(s.initial_residual_px, f.bad_residual_px, f.good_residual_px);
@@ -288,7 +288,13 @@ double Tracker::Confidence(const SolveSummary& s) const {
                           f.good_residual_ratio);
   }
   const double update_term = Ramp(s.last_update_px, f.bad_update_px, f.good_update_px);
-  const double photometric = support_term * residual_term * update_term;
+  return support_term * residual_term * update_term;
+}
+
+double Tracker::Confidence(const SolveSummary& s) const {
+  const FailureOptions& f = options_.failure;
+  if (s.equations < f.min_pixels) return 0.0;
+  const double photometric = use_photometric_ ? PhotometricFit(s) : 0.0;
   // The silhouette judges the frame of a model without appearance; with measured depth to
   // guard it, it also vouches for a frame whose texture says little (motion blur). Measured
   // depth, when there is some, must agree in every case.
@@ -550,6 +556,9 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
       timer.Restart();
       const FlowSolution solution =
           SolveJoint({&photometric_, &depth_, &region_}, options_.solver);
+      if (coarsest && iteration == 0) {
+        for (const RegionCounts& rc : camera_region_counts) s.start_region_counts += rc;
+      }
       if (level == 0) {
         s.depth_counts = DepthCounts();
         for (const DepthCounts& d : camera_depth_counts) s.depth_counts += d;
@@ -653,6 +662,22 @@ TrackResult Tracker::Track(const Frame& input_frame) {
   const double predict_ms = timer.ElapsedMilliseconds();
 
   TrackResult r = AlignPredicted(frame, predicted);
+  const RegionModalityOptions& ro = options_.region;
+  if (learn_from_start_ && use_photometric_ && ro.enabled &&
+      PhotometricFit(r.summary) < options_.photometric.min_start_fit &&
+      r.summary.start_region_counts.EdgeShare() >= ro.min_start_edge_share) {
+    // At the pose it was given, the image has an edge along most of the silhouette (the
+    // object is there) but the model's appearance does not fit it (wrong
+    // colours, highlights the model lacks): the optical flow would drag the pose away. The
+    // silhouette tracks it instead.
+    UNSEEN_LOG_INFO("tracker: the model's appearance does not fit the first frame (fit {:.2f} "
+                    "< {:.2f}); tracking by its silhouette",
+                    PhotometricFit(r.summary), options_.photometric.min_start_fit);
+    use_photometric_ = false;
+    const StageTimes first = r.summary.times;
+    r = AlignPredicted(frame, predicted);
+    r.summary.times += first;
+  }
   learn_from_start_ = false;
   if (status_ == TrackStatus::kLost && f.search_when_lost && r.confidence < f.recover_confidence) {
     // Re-acquisition (3.9): correlation seeds, translations and rotations around the last

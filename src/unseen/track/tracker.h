@@ -67,6 +67,7 @@ struct SolveSummary {
   // update, standard deviations.
   RegionCounts region_counts;
   double region_residual = 0.0;
+  RegionCounts start_region_counts;  // the region modality's first round, at the start pose
   int search_candidates = 0;             // poses tried by the re-acquisition search
   StageTimes times;
   // One line: levels, iterations, pixels used/rejected, residual, ms.
@@ -137,6 +138,9 @@ class Tracker {
   const MotionPredictor& predictor() const { return *predictor_; }
   bool initialized() const { return initialized_; }
   TrackStatus status() const { return status_; }
+  // Whether the photometric modality runs for the current model (PhotometricOptions:
+  // enabled, require_appearance, and the first frame's min_start_fit check).
+  bool photometric_in_use() const { return use_photometric_; }
 
  private:
   struct CameraWork;
@@ -147,6 +151,9 @@ class Tracker {
   // corrections call for (PyramidOptions::adaptive_levels).
   TrackResult AlignPredicted(const Frame& frame, const Rigid3d& predicted);
   double Confidence(const SolveSummary& summary) const;
+  // The photometric modality's own judgement of the alignment in [0, 1] (FailureOptions:
+  // support, residual, convergence), whatever the other modalities say.
+  double PhotometricFit(const SolveSummary& summary) const;
   // The rectangle of `camera`'s pixels the object can cover at `cam_from_obj`: the
   // bounding sphere's rectangle (3.5, (4.16)-(4.21)) cut down to the projection of the
   // model's box, which is tighter for all but round objects. std::nullopt: out of view.

@@ -117,6 +117,8 @@ void TrackerOptions::Check() const {
 
 void PhotometricOptions::Check() const {
   UNSEEN_CHECK(weight > 0.0 && std::isfinite(weight), "photometric.weight {} must be > 0", weight);
+  UNSEEN_CHECK(min_start_fit >= 0.0 && min_start_fit <= 1.0,
+               "photometric.min_start_fit {} must be in [0, 1]", min_start_fit);
 }
 
 namespace {
@@ -178,6 +180,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
       {"photometric",
        {{"enabled", Field(&ph.enabled)},
         {"require_appearance", Field(&ph.require_appearance)},
+        {"min_start_fit", Field(&ph.min_start_fit)},
         {"weight", Field(&ph.weight)}}},
       {"preprocess",
        {{"use_linf", Field(&pp.use_linf)},
@@ -297,7 +300,8 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"min_noise", Field(&rg.residual.min_noise)},
         {"weight", Field(&rg.residual.weight)},
         {"bad_agreement", Field(&rg.bad_agreement)},
-        {"good_agreement", Field(&rg.good_agreement)}}},
+        {"good_agreement", Field(&rg.good_agreement)},
+        {"min_start_edge_share", Field(&rg.min_start_edge_share)}}},
   };
   UNSEEN_CHECK(root.IsMap(), "{}: expected a map at the top level", what);
   for (const auto& kv : root) {

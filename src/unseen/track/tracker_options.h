@@ -157,6 +157,11 @@ struct PhotometricOptions {
   // the optical flow nothing but its silhouette's edges, which mislead on low-contrast
   // backgrounds and under moving highlights; the region modality judges the silhouette.
   bool require_appearance = true;
+  // The first frame after Initialize() checks that the model's appearance fits the image at
+  // the given pose: with a photometric fit (Tracker's FailureOptions terms) below this, the
+  // model's colours are taken to disagree with the camera's (or to lack its highlights) and
+  // the object is tracked without the photometric modality (with region enabled); 0: never.
+  double min_start_fit = 0.1;
   double weight = 1.0;
   void Check() const;
 };
