@@ -527,8 +527,10 @@ Sequence Sequence::OpenVideo(const std::string& path, const PinholeCamera& camer
   impl->kind = Kind::kVideo;
   impl->path = path;
   impl->fps = fps;
-  UNSEEN_CHECK(impl->capture.open(path) && impl->capture.isOpened(),
-               "{}: cannot open video (no OpenCV backend can decode it)", path);
+  // FFmpeg decodes every container and codec a file may hold; asking it alone keeps
+  // OpenCV from probing camera back-ends (gphoto2, libusb) for a file name.
+  UNSEEN_CHECK(impl->capture.open(path, cv::CAP_FFMPEG) && impl->capture.isOpened(),
+               "{}: cannot open video (FFmpeg cannot decode it)", path);
   cv::Mat first;
   UNSEEN_CHECK(impl->capture.read(first) && !first.empty(), "{}: video has no readable frame",
                path);
