@@ -212,9 +212,15 @@ std::vector<Projector> ReadProjectors(const fs::path& json_path) {
   const std::string file = json_path.string();
   std::ifstream in(json_path);
   UNSEEN_CHECK(in.good(), "{}: cannot open projector file", file);
+  // Nesting is limited: the value is copied and printed recursively below.
+  constexpr int kMaxDepth = 64;
+  const json::parser_callback_t limit_depth = [&](int depth, json::parse_event_t, json&) {
+    UNSEEN_CHECK(depth <= kMaxDepth, "{}: JSON nested deeper than {} levels", file, kMaxDepth);
+    return true;
+  };
   json root;
   try {
-    root = json::parse(in);
+    root = json::parse(in, limit_depth);
   } catch (const json::exception& e) {
     ThrowError("{}: malformed JSON: {}", file, e.what());
   }
