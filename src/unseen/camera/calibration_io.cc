@@ -163,7 +163,12 @@ PinholeCamera LoadOpenCvText(const std::string& path, const std::string& text) {
     cv::FileStorage fs(content, cv::FileStorage::READ | cv::FileStorage::MEMORY);
     UNSEEN_CHECK(fs.isOpened(), "{}: not an OpenCV YAML/XML/JSON file", path);
     return ReadOpenCv(fs, path);
+  } catch (const Error&) {
+    throw;
   } catch (const cv::Exception& e) {
+    ThrowError("{}: malformed OpenCV calibration file: {}", path, e.what());
+  } catch (const std::exception& e) {
+    // OpenCV 4.6's YAML parser also throws std::length_error on some malformed keys.
     ThrowError("{}: malformed OpenCV calibration file: {}", path, e.what());
   }
 }
