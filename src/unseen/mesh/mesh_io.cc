@@ -303,6 +303,14 @@ void CheckPlyHeader(const std::string& path) {
     types.insert({"float", "double", "float32", "float64"});
     return types;
   }();
+  // Element and property names are words that do not start with a digit: assimp takes
+  // "element 4294967295vertex 4" for 4294967295 vertices.
+  const auto is_name = [](const std::string& word) {
+    return !word.empty() && !std::isdigit(static_cast<unsigned char>(word[0])) &&
+           std::all_of(word.begin(), word.end(), [](unsigned char c) {
+             return std::isalnum(c) || c == '_' || c == '-' || c == '.';
+           });
+  };
   std::error_code ec;
   const uintmax_t file_size = fs::file_size(path, ec);
   std::ifstream in(path, std::ios::binary);
@@ -329,7 +337,7 @@ void CheckPlyHeader(const std::string& path) {
     } else if (keyword == "element") {
       const bool count_ok = words.size() == 3 && !words[2].empty() && words[2].size() <= 12 &&
                             words[2].find_first_not_of("0123456789") == std::string::npos;
-      valid = count_ok && elements.insert(words[1]).second;
+      valid = count_ok && is_name(words[1]) && elements.insert(words[1]).second;
       if (valid) {
         UNSEEN_CHECK(std::stoull(words[2]) <= file_size,
                      "{}: PLY element '{}' has {} entries, more than the file's {} bytes can hold",
@@ -341,7 +349,7 @@ void CheckPlyHeader(const std::string& path) {
       const bool list = words.size() == 5 && words[1] == "list";
       valid = list ? kIntegerTypes.count(words[2]) && kTypes.count(words[3])
                    : words.size() == 3 && kTypes.count(words[1]);
-      valid = valid && properties.insert(words.back()).second;
+      valid = valid && is_name(words.back()) && properties.insert(words.back()).second;
       face_indices = face_indices || (element == "face" && list &&
                                       (words[4] == "vertex_indices" || words[4] == "vertex_index"));
     } else if (keyword == "end_header") {
