@@ -51,7 +51,8 @@ run_target() {
   if [ -d "$root/fuzz/regressions/$name" ]; then inputs+=("$root/fuzz/regressions/$name"); fi
   local status=0
   "$build/fuzz/${name}_fuzzer" "${inputs[@]}" -max_total_time="$seconds" -timeout=5 \
-    -rss_limit_mb=2048 -artifact_prefix="$work/" -print_final_stats=1 "${@:2}" \
+    -rss_limit_mb=2048 -dict="$root/fuzz/numbers.dict" -artifact_prefix="$work/" \
+    -print_final_stats=1 "${@:2}" \
     > "$work/log" 2>&1 || status=$?
   echo "$status" > "$work/status"
 }
