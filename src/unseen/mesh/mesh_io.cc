@@ -13,6 +13,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -364,6 +365,56 @@ void CheckPlyHeader(const std::string& path) {
   ThrowError("{}: PLY header has no end_header line", path);
 }
 
+// OBJ: assimp crashes on face corners that refer to normals (or uvs) the file does not
+// have. Every index of the f, l and p lines is checked: positive ones against the file's
+// counts of v, vt and vn, negative (relative) ones against those read so far.
+void CheckObjIndices(const std::string& path) {
+  const std::string text = ReadText(path);
+  const auto for_each_line = [&](const auto& visit) {
+    std::istringstream in(text);
+    std::string line;
+    for (int n = 1; std::getline(in, line); ++n) {
+      line = line.substr(0, line.find('#'));
+      std::istringstream words(line);
+      std::string keyword;
+      words >> keyword;
+      visit(n, keyword, words, line);
+    }
+  };
+  const char* kNames[3] = {"vertex", "texture coordinate", "normal"};
+  int64_t total[3] = {0, 0, 0}, so_far[3] = {0, 0, 0};
+  const auto count = [](const std::string& keyword, int64_t* counts) {
+    if (keyword == "v") ++counts[0];
+    if (keyword == "vt") ++counts[1];
+    if (keyword == "vn") ++counts[2];
+  };
+  for_each_line([&](int, const std::string& keyword, std::istream&, const std::string&) {
+    count(keyword, total);
+  });
+  for_each_line([&](int n, const std::string& keyword, std::istream& words,
+                    const std::string& line) {
+    count(keyword, so_far);
+    if (keyword != "f" && keyword != "l" && keyword != "p") return;
+    std::string corner;
+    while (words >> corner) {
+      size_t start = 0;
+      for (int k = 0; k < 3 && start <= corner.size(); ++k) {
+        const size_t slash = std::min(corner.find('/', start), corner.size());
+        const std::string index = corner.substr(start, slash - start);
+        start = slash + 1;
+        if (index.empty() && k > 0) continue;  // "1//3": no texture coordinate
+        char* end = nullptr;
+        const long long i = std::strtoll(index.c_str(), &end, 10);
+        const bool valid =
+            !index.empty() && *end == '\0' && i != 0 && (i > 0 ? i <= total[k] : -i <= so_far[k]);
+        UNSEEN_CHECK(valid, "{}: line {}: '{}' refers to {} {}, but the file has {}", path, n,
+                     line.substr(0, 80), kNames[k], index, total[k]);
+      }
+      UNSEEN_CHECK(start > corner.size(), "{}: line {}: '{}' is not v/vt/vn", path, n, corner);
+    }
+  });
+}
+
 bool IsBlank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
 
 // Position just after `count =` in `text` at `at` (where "count" starts), or npos when no
@@ -507,9 +558,11 @@ struct PlyFaceTexcoords {
   bool several_textures = false;               // a `texnumber` other than 0 was seen
 };
 
-// Reads the face texcoords of a PLY; std::nullopt when it has none. Throws naming the file
-// for a header or body it cannot parse.
-std::optional<PlyFaceTexcoords> ReadPlyFaceTexcoords(const std::string& path) {
+// Reads the body of a PLY before assimp does: checks that every list has at most 1e6
+// entries (assimp allocates what an ASCII list count says, 32 GB for "42949672950") and
+// returns the face texcoords, or std::nullopt when the faces have none. Throws naming the
+// file for a header or body it cannot parse.
+std::optional<PlyFaceTexcoords> ReadPlyBody(const std::string& path) {
   enum class Format { kAscii, kLittle, kBig };
   struct Property {
     std::string name;
@@ -581,7 +634,6 @@ std::optional<PlyFaceTexcoords> ReadPlyFaceTexcoords(const std::string& path) {
     }
   }
   UNSEEN_CHECK(header_done, "{}: PLY header has no end_header", path);
-  if (!has_face_texcoords) return std::nullopt;
 
   auto read_value = [&](const std::string& type) -> double {
     if (format == Format::kAscii) {
@@ -644,12 +696,13 @@ std::optional<PlyFaceTexcoords> ReadPlyFaceTexcoords(const std::string& path) {
           if (wanted_texcoords) texcoords.push_back(value);
         }
       }
-      if (is_face) {
+      if (is_face && has_face_texcoords) {
         result.indices.push_back(std::move(indices));
         result.texcoords.push_back(std::move(texcoords));
       }
     }
   }
+  if (!has_face_texcoords) return std::nullopt;
   return result;
 }
 
@@ -1120,7 +1173,12 @@ Mesh LoadMesh(const std::string& path, double scale_to_metres) {
   UNSEEN_CHECK(fs::is_regular_file(path, ec), "{}: mesh file not found", path);
 
   const std::string extension = LowerExtension(path);
-  if (extension == ".ply") CheckPlyHeader(path);
+  std::optional<PlyFaceTexcoords> ply_face_texcoords;
+  if (extension == ".ply") {
+    CheckPlyHeader(path);
+    ply_face_texcoords = ReadPlyBody(path);
+  }
+  if (extension == ".obj") CheckObjIndices(path);
   if (extension == ".dae" || extension == ".xml") CheckColladaText(path);
   if (extension == ".gltf" || extension == ".glb") CheckGltfText(path, extension == ".glb");
 
@@ -1135,11 +1193,9 @@ Mesh LoadMesh(const std::string& path, double scale_to_metres) {
   // assimp's post-processing asserts (aborts) on some malformed data that its validation
   // lets through, e.g. faces without indices: check the raw data first.
   CheckRawScene(*scene, path);
-  if (extension == ".ply") {
-    if (const auto face_texcoords = ReadPlyFaceTexcoords(path)) {
-      // The scene is the importer's to modify until post-processing.
-      ApplyPlyFaceTexcoords(*face_texcoords, path, const_cast<aiScene*>(scene));
-    }
+  if (ply_face_texcoords) {
+    // The scene is the importer's to modify until post-processing.
+    ApplyPlyFaceTexcoords(*ply_face_texcoords, path, const_cast<aiScene*>(scene));
   }
   // (No aiProcess_JoinIdenticalVertices: assimp 5.2 merges vertices whose colours differ;
   // WeldIdenticalVertices does it afterwards.)
