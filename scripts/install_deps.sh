@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs every Debian package unseen needs to build, test and benchmark.
+# Installs every Debian package unseen needs to build, test and benchmark; with --fuzz also
+# what scripts/fuzz.sh needs (clang, libFuzzer and the sanitizer runtimes, llvm-symbolizer).
 # Idempotent: returns at once when everything is already present.
 set -euo pipefail
 
@@ -9,6 +10,14 @@ PACKAGES=(
   libspdlog-dev libfmt-dev libassimp-dev
   libgtest-dev libgmock-dev libbenchmark-dev libomp-dev
 )
+FUZZ_PACKAGES=(clang libclang-rt-14-dev llvm-14)
+
+for arg in "$@"; do
+  case "$arg" in
+    --fuzz) PACKAGES+=("${FUZZ_PACKAGES[@]}") ;;
+    *) echo "usage: $0 [--fuzz]" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -2,6 +2,7 @@
 #include "unseen/camera/calibration_io.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -75,6 +76,30 @@ int ReadInt(const cv::FileStorage& fs, const char* key, const std::string& path)
   return static_cast<int>(node);
 }
 
+// cv::read allocates the matrix that "rows" and "cols" (or an n-d matrix's "sizes") declare
+// before it reads "data", so a declared shape larger than any calibration matrix is rejected
+// first.
+void CheckMatrixShape(const cv::FileNode& node, const char* key, const std::string& path) {
+  constexpr int kMaxSide = 64;
+  UNSEEN_CHECK(node.isMap(), "{}: field \"{}\" is not a matrix (rows, cols, dt, data)", path, key);
+  std::vector<cv::FileNode> sides = {node["rows"], node["cols"]};
+  const cv::FileNode sizes = node["sizes"];
+  if (!sizes.empty() && !sizes.isNone()) {
+    UNSEEN_CHECK(sizes.isSeq() && sizes.size() <= 2,
+                 "{}: field \"{}\" has \"sizes\" of a matrix of more than 2 dimensions", path, key);
+    for (size_t i = 0; i < sizes.size(); ++i) sides.push_back(sizes[static_cast<int>(i)]);
+  }
+  for (const cv::FileNode& side : sides) {
+    if (side.empty() || side.isNone()) continue;
+    UNSEEN_CHECK(side.isInt(), "{}: field \"{}\" has a size \"{}\" that is not an integer", path,
+                 key, side.isString() ? side.string() : std::string("(not a number)"));
+    const int n = static_cast<int>(side);
+    UNSEEN_CHECK(n >= 0 && n <= kMaxSide,
+                 "{}: field \"{}\" declares a size of {}, expected at most {}", path, key, n,
+                 kMaxSide);
+  }
+}
+
 std::vector<double> ReadMatrix(const cv::FileStorage& fs, const char* key, const std::string& path,
                                bool required, int rows, int cols) {
   const cv::FileNode node = fs[key];
@@ -82,6 +107,7 @@ std::vector<double> ReadMatrix(const cv::FileStorage& fs, const char* key, const
     UNSEEN_CHECK(!required, "{}: field \"{}\" is missing", path, key);
     return {};
   }
+  CheckMatrixShape(node, key, path);
   cv::Mat m;
   node >> m;
   UNSEEN_CHECK(!m.empty() && m.channels() == 1, "{}: field \"{}\" is not a matrix", path, key);
@@ -106,7 +132,26 @@ PinholeCamera ReadOpenCv(cv::FileStorage& fs, const std::string& path) {
   return MakeCamera(k, width, height, dist, path);
 }
 
+// cv::FileStorage parses recursively, so that deeply nested input exhausts the stack; a
+// calibration file nests a few levels. Counts [ ], { } and XML elements.
+void CheckNesting(const std::string& path, const std::string& text) {
+  constexpr int kMaxDepth = 64;
+  int depth = 0;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    const char next = i + 1 < text.size() ? text[i + 1] : '\0';
+    if (c == '[' || c == '{' || (c == '<' && std::isalpha(static_cast<unsigned char>(next)))) {
+      ++depth;
+    } else if (c == ']' || c == '}' || (c == '<' && next == '/') || (c == '/' && next == '>')) {
+      --depth;
+    }
+    UNSEEN_CHECK(depth <= kMaxDepth, "{}: nested deeper than {} levels (at byte {})", path,
+                 kMaxDepth, i);
+  }
+}
+
 PinholeCamera LoadOpenCvText(const std::string& path, const std::string& text) {
+  CheckNesting(path, text);
   try {
     std::string content = text;
     const std::string trimmed = LeftTrimmed(text);
@@ -118,7 +163,12 @@ PinholeCamera LoadOpenCvText(const std::string& path, const std::string& text) {
     cv::FileStorage fs(content, cv::FileStorage::READ | cv::FileStorage::MEMORY);
     UNSEEN_CHECK(fs.isOpened(), "{}: not an OpenCV YAML/XML/JSON file", path);
     return ReadOpenCv(fs, path);
+  } catch (const Error&) {
+    throw;
   } catch (const cv::Exception& e) {
+    ThrowError("{}: malformed OpenCV calibration file: {}", path, e.what());
+  } catch (const std::exception& e) {
+    // OpenCV 4.6's YAML parser also throws std::length_error on some malformed keys.
     ThrowError("{}: malformed OpenCV calibration file: {}", path, e.what());
   }
 }

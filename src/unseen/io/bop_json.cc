@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include <fmt/format.h>
 
@@ -23,15 +24,27 @@ std::string Brief(const nlohmann::json& value) {
 
 }  // namespace
 
+nlohmann::json ParseJson(std::string_view text, const std::string& what) {
+  const nlohmann::json::parser_callback_t limit_depth =
+      [&what](int depth, nlohmann::json::parse_event_t, nlohmann::json&) {
+        UNSEEN_CHECK(depth <= kMaxJsonDepth, "{}: JSON nested deeper than {} levels", what,
+                     kMaxJsonDepth);
+        return true;
+      };
+  try {
+    return nlohmann::json::parse(text.begin(), text.end(), limit_depth);
+  } catch (const nlohmann::json::exception& e) {
+    ThrowError("{}: malformed JSON: {}", what, e.what());
+  }
+}
+
 nlohmann::json ReadJsonFile(const std::string& path) {
   UNSEEN_CHECK(std::filesystem::is_regular_file(path), "{}: file not found", path);
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   UNSEEN_CHECK(in.good(), "{}: cannot open file", path);
-  try {
-    return nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    ThrowError("{}: malformed JSON: {}", path, e.what());
-  }
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  UNSEEN_CHECK(!in.bad(), "{}: cannot read file", path);
+  return ParseJson(text, path);
 }
 
 namespace {

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -15,8 +16,17 @@
 
 namespace unseen::bop {
 
-// Parses a JSON file. Throws unseen::Error naming the file for a missing/unreadable file
-// and with nlohmann's message (which gives the byte position) for malformed JSON.
+// Nesting depth that ParseJson accepts. No BOP file comes close; deeper input would
+// exhaust the stack of the code that walks the parsed value recursively (copies, dumps).
+constexpr int kMaxJsonDepth = 64;
+
+// Parses JSON text; `what` names the source in messages. Throws unseen::Error with nlohmann's
+// message (which gives the byte position) for malformed JSON, and for nesting deeper than
+// kMaxJsonDepth.
+nlohmann::json ParseJson(std::string_view text, const std::string& what);
+
+// Parses a JSON file (ParseJson). Throws unseen::Error naming the file for a missing or
+// unreadable file, malformed JSON or nesting deeper than kMaxJsonDepth.
 nlohmann::json ReadJsonFile(const std::string& path);
 
 // Writes `json` to `path` (indented by `indent` spaces, -1 = compact). Throws on failure.

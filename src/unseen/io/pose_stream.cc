@@ -149,12 +149,7 @@ std::vector<PoseRecord> ReadJsonLines(const std::string& path, std::istream& in)
     if (Trim(line).empty()) continue;
     any_line = true;
     const std::string where = fmt::format("{}:{}", path, line_number);
-    nlohmann::json object;
-    try {
-      object = nlohmann::json::parse(line);
-    } catch (const nlohmann::json::exception& e) {
-      ThrowError("{}: malformed JSON: {}", where, e.what());
-    }
+    const nlohmann::json object = bop::ParseJson(line, where);
     UNSEEN_CHECK(object.is_object(), "{}: expected a JSON object per line", where);
     auto number = [&](const char* name) {
       const auto it = object.find(name);

@@ -13,9 +13,11 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -24,6 +26,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -212,9 +215,15 @@ std::vector<Projector> ReadProjectors(const fs::path& json_path) {
   const std::string file = json_path.string();
   std::ifstream in(json_path);
   UNSEEN_CHECK(in.good(), "{}: cannot open projector file", file);
+  // Nesting is limited: the value is copied and printed recursively below.
+  constexpr int kMaxDepth = 64;
+  const json::parser_callback_t limit_depth = [&](int depth, json::parse_event_t, json&) {
+    UNSEEN_CHECK(depth <= kMaxDepth, "{}: JSON nested deeper than {} levels", file, kMaxDepth);
+    return true;
+  };
   json root;
   try {
-    root = json::parse(in);
+    root = json::parse(in, limit_depth);
   } catch (const json::exception& e) {
     ThrowError("{}: malformed JSON: {}", file, e.what());
   }
@@ -272,6 +281,245 @@ std::vector<Projector> ReadProjectors(const fs::path& json_path) {
   return projectors;
 }
 
+// The whole file as text.
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  UNSEEN_CHECK(in.good(), "{}: cannot open mesh file", path);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// Checks made before assimp 5.2 reads a file, for input it does not survive.
+//
+// PLY: assimp mishandles malformed headers. Without an end_header line it loops for ever; a
+// face element without vertex indices (but e.g. texcoords) makes it dereference a null
+// pointer; lines it does not know and repeated elements have it free memory it did not
+// allocate; an element count larger than the file has it reserve gigabytes. The header is
+// checked line by line against the PLY grammar first.
+void CheckPlyHeader(const std::string& path) {
+  static const std::set<std::string> kIntegerTypes = {"char",  "uchar",  "short", "ushort",
+                                                      "int",   "uint",   "int8",  "uint8",
+                                                      "int16", "uint16", "int32", "uint32"};
+  static const std::set<std::string> kTypes = [] {
+    std::set<std::string> types = kIntegerTypes;
+    types.insert({"float", "double", "float32", "float64"});
+    return types;
+  }();
+  // Element and property names are words that do not start with a digit: assimp takes
+  // "element 4294967295vertex 4" for 4294967295 vertices.
+  const auto is_name = [](const std::string& word) {
+    return !word.empty() && !std::isdigit(static_cast<unsigned char>(word[0])) &&
+           std::all_of(word.begin(), word.end(), [](unsigned char c) {
+             return std::isalnum(c) || c == '_' || c == '-' || c == '.';
+           });
+  };
+  std::error_code ec;
+  const uintmax_t file_size = fs::file_size(path, ec);
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  bool format = false, face_indices = false;
+  std::set<std::string> elements, properties;
+  std::string element;
+  for (int n = 1; n <= 100000 && std::getline(in, line); ++n) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream stream(line);
+    const std::vector<std::string> words{std::istream_iterator<std::string>(stream),
+                                         std::istream_iterator<std::string>()};
+    const std::string keyword = words.empty() ? "" : words[0];
+    bool valid = false;
+    if (n == 1) {
+      valid = words.size() == 1 && keyword == "ply";
+    } else if (keyword == "comment" || keyword == "obj_info") {
+      valid = true;
+    } else if (keyword == "format") {
+      valid = !format && words.size() == 3 &&
+              (words[1] == "ascii" || words[1] == "binary_little_endian" ||
+               words[1] == "binary_big_endian");
+      format = true;
+    } else if (keyword == "element") {
+      const bool count_ok = words.size() == 3 && !words[2].empty() && words[2].size() <= 12 &&
+                            words[2].find_first_not_of("0123456789") == std::string::npos;
+      valid = count_ok && is_name(words[1]) && elements.insert(words[1]).second;
+      if (valid) {
+        UNSEEN_CHECK(std::stoull(words[2]) <= file_size,
+                     "{}: PLY element '{}' has {} entries, more than the file's {} bytes can hold",
+                     path, words[1], words[2], file_size);
+        element = words[1];
+        properties.clear();
+      }
+    } else if (keyword == "property" && !element.empty()) {
+      const bool list = words.size() == 5 && words[1] == "list";
+      valid = list ? kIntegerTypes.count(words[2]) && kTypes.count(words[3])
+                   : words.size() == 3 && kTypes.count(words[1]);
+      valid = valid && is_name(words.back()) && properties.insert(words.back()).second;
+      face_indices = face_indices || (element == "face" && list &&
+                                      (words[4] == "vertex_indices" || words[4] == "vertex_index"));
+    } else if (keyword == "end_header") {
+      UNSEEN_CHECK(words.size() == 1 && format, "{}: PLY header line {} is not valid: '{}'", path,
+                   n, line.substr(0, 80));
+      UNSEEN_CHECK(!elements.count("face") || face_indices,
+                   "{}: PLY element 'face' has no vertex_indices list property", path);
+      return;
+    }
+    UNSEEN_CHECK(valid, "{}: PLY header line {} is not valid: '{}'", path, n, line.substr(0, 80));
+  }
+  ThrowError("{}: PLY header has no end_header line", path);
+}
+
+// OBJ: assimp crashes on face corners that refer to normals (or uvs) the file does not
+// have. Every index of the f, l and p lines is checked: positive ones against the file's
+// counts of v, vt and vn, negative (relative) ones against those read so far.
+void CheckObjIndices(const std::string& path) {
+  const std::string text = ReadText(path);
+  const auto for_each_line = [&](const auto& visit) {
+    std::istringstream in(text);
+    std::string line;
+    for (int n = 1; std::getline(in, line); ++n) {
+      line = line.substr(0, line.find('#'));
+      std::istringstream words(line);
+      std::string keyword;
+      words >> keyword;
+      visit(n, keyword, words, line);
+    }
+  };
+  const char* kNames[3] = {"vertex", "texture coordinate", "normal"};
+  int64_t total[3] = {0, 0, 0}, so_far[3] = {0, 0, 0};
+  const auto count = [](const std::string& keyword, int64_t* counts) {
+    if (keyword == "v") ++counts[0];
+    if (keyword == "vt") ++counts[1];
+    if (keyword == "vn") ++counts[2];
+  };
+  for_each_line([&](int, const std::string& keyword, std::istream&, const std::string&) {
+    count(keyword, total);
+  });
+  for_each_line([&](int n, const std::string& keyword, std::istream& words,
+                    const std::string& line) {
+    count(keyword, so_far);
+    if (keyword != "f" && keyword != "l" && keyword != "p") return;
+    std::string corner;
+    while (words >> corner) {
+      size_t start = 0;
+      for (int k = 0; k < 3 && start <= corner.size(); ++k) {
+        const size_t slash = std::min(corner.find('/', start), corner.size());
+        const std::string index = corner.substr(start, slash - start);
+        start = slash + 1;
+        if (index.empty() && k > 0) continue;  // "1//3": no texture coordinate
+        char* end = nullptr;
+        const long long i = std::strtoll(index.c_str(), &end, 10);
+        const bool valid =
+            !index.empty() && *end == '\0' && i != 0 && (i > 0 ? i <= total[k] : -i <= so_far[k]);
+        UNSEEN_CHECK(valid, "{}: line {}: '{}' refers to {} {}, but the file has {}", path, n,
+                     line.substr(0, 80), kNames[k], index, total[k]);
+      }
+      UNSEEN_CHECK(start > corner.size(), "{}: line {}: '{}' is not v/vt/vn", path, n, corner);
+    }
+  });
+}
+
+bool IsBlank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+
+// Position just after `count =` in `text` at `at` (where "count" starts), or npos when no
+// count attribute starts there.
+size_t AfterCountAttribute(std::string_view text, size_t at) {
+  if (at == 0 || !IsBlank(text[at - 1])) return std::string::npos;  // <vcount>, "account", ...
+  size_t i = at + 5;
+  while (i < text.size() && IsBlank(text[i])) ++i;
+  if (i >= text.size() || text[i] != '=') return std::string::npos;
+  return i + 1;
+}
+
+// Collada: a <p> index list holding anything but integers and blanks makes assimp loop for
+// ever, a data array without a count attribute makes it dereference a null pointer, and a
+// count="N" attribute has it reserve memory for N values before it looks at them. Counts
+// are checked against the file's size (every value takes at least a byte), so that a short
+// file cannot ask for gigabytes.
+void CheckColladaText(const std::string& path) {
+  const std::string text = ReadText(path);
+  for (const char* array : {"<float_array", "<int_array", "<bool_array", "<Name_array",
+                            "<IDREF_array", "<SIDREF_array", "<token_array"}) {
+    for (size_t at = text.find(array); at != std::string::npos; at = text.find(array, at + 1)) {
+      const std::string_view tag =
+          std::string_view(text).substr(at, text.find('>', at) - at);  // to the end if no '>'
+      bool counted = false;
+      for (size_t c = tag.find("count"); c != std::string::npos && !counted;
+           c = tag.find("count", c + 1)) {
+        counted = AfterCountAttribute(tag, c) != std::string::npos;
+      }
+      UNSEEN_CHECK(counted, "{}: {}> element without a count attribute", path, array);
+    }
+  }
+  for (size_t at = text.find("count"); at != std::string::npos; at = text.find("count", at + 1)) {
+    size_t i = AfterCountAttribute(text, at);
+    if (i == std::string::npos) continue;
+    while (i < text.size() && IsBlank(text[i])) ++i;
+    if (i >= text.size() || (text[i] != '"' && text[i] != '\'')) continue;
+    const size_t close = text.find(text[i], i + 1);
+    if (close == std::string::npos) continue;
+    const std::string value = Trim(text.substr(i + 1, close - i - 1));
+    // Decimal or 0x-hexadecimal, as assimp's XML reader takes them; a sign wraps around.
+    const bool hex = value.rfind("0x", 0) == 0 || value.rfind("0X", 0) == 0;
+    const std::string digits = hex ? value.substr(2) : value;
+    const bool plain = !digits.empty() && digits.size() <= 12 &&
+                       std::all_of(digits.begin(), digits.end(), [&](unsigned char c) {
+                         return hex ? std::isxdigit(c) != 0 : std::isdigit(c) != 0;
+                       });
+    UNSEEN_CHECK(plain && std::stoull(digits, nullptr, hex ? 16 : 10) <= text.size(),
+                 "{}: count=\"{}\" is not a number of values the file can hold ({} bytes)", path,
+                 value, text.size());
+  }
+  for (size_t at = text.find("<p"); at != std::string::npos; at = text.find("<p", at + 1)) {
+    const size_t name_end = at + 2;
+    if (name_end >= text.size() || (text[name_end] != '>' && !IsBlank(text[name_end]))) continue;
+    const size_t open_end = text.find('>', name_end);
+    if (open_end == std::string::npos || text[open_end - 1] == '/') continue;
+    const size_t end = std::min(text.find('<', open_end), text.size());
+    const std::string list = text.substr(open_end + 1, end - open_end - 1);
+    const size_t bad = list.find_first_not_of("0123456789+- \t\r\n");
+    UNSEEN_CHECK(bad == std::string::npos,
+                 "{}: <p> index list holds '{}', expected integers separated by blanks", path,
+                 list.substr(bad, 20));
+  }
+}
+
+// glTF: assimp parses the JSON recursively, so that deeply nested input exhausts the
+// stack, and allocates what a .glb file's header says before it reads it. The nesting of a
+// .gltf file, or of a .glb file's JSON chunk, and the lengths in a .glb header are checked
+// first.
+void CheckGltfText(const std::string& path, bool binary) {
+  constexpr int kMaxDepth = 64;
+  const std::string text = ReadText(path);
+  std::string_view json = text;
+  if (binary) {  // "glTF", version, total length, then the JSON chunk's length, type, content
+    if (text.size() < 20 || text.compare(0, 4, "glTF") != 0) return;
+    uint32_t total = 0, json_length = 0;
+    std::memcpy(&total, text.data() + 8, sizeof(total));
+    std::memcpy(&json_length, text.data() + 12, sizeof(json_length));
+    UNSEEN_CHECK(total >= 20 && total <= text.size() && json_length <= total - 20,
+                 "{}: GLB header gives a length of {} bytes and a JSON chunk of {} bytes; the "
+                 "file has {} bytes",
+                 path, total, json_length, text.size());
+    json = json.substr(20, json_length);
+  }
+  int depth = 0;
+  bool in_string = false;
+  for (size_t i = 0; i < json.size(); ++i) {
+    const char c = json[i];
+    if (in_string) {
+      if (c == '\\') {
+        ++i;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      UNSEEN_CHECK(++depth <= kMaxDepth, "{}: glTF JSON nested deeper than {} levels", path,
+                   kMaxDepth);
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+}
+
 // Throws naming the file for faces without indices, indices out of range and non-finite
 // vertex positions in assimp's raw (not yet post-processed) scene.
 void CheckRawScene(const aiScene& scene, const std::string& path) {
@@ -310,9 +558,11 @@ struct PlyFaceTexcoords {
   bool several_textures = false;               // a `texnumber` other than 0 was seen
 };
 
-// Reads the face texcoords of a PLY; std::nullopt when it has none. Throws naming the file
-// for a header or body it cannot parse.
-std::optional<PlyFaceTexcoords> ReadPlyFaceTexcoords(const std::string& path) {
+// Reads the body of a PLY before assimp does: checks that every list has at most 1e6
+// entries (assimp allocates what an ASCII list count says, 32 GB for "42949672950") and
+// returns the face texcoords, or std::nullopt when the faces have none. Throws naming the
+// file for a header or body it cannot parse.
+std::optional<PlyFaceTexcoords> ReadPlyBody(const std::string& path) {
   enum class Format { kAscii, kLittle, kBig };
   struct Property {
     std::string name;
@@ -384,7 +634,6 @@ std::optional<PlyFaceTexcoords> ReadPlyFaceTexcoords(const std::string& path) {
     }
   }
   UNSEEN_CHECK(header_done, "{}: PLY header has no end_header", path);
-  if (!has_face_texcoords) return std::nullopt;
 
   auto read_value = [&](const std::string& type) -> double {
     if (format == Format::kAscii) {
@@ -447,12 +696,13 @@ std::optional<PlyFaceTexcoords> ReadPlyFaceTexcoords(const std::string& path) {
           if (wanted_texcoords) texcoords.push_back(value);
         }
       }
-      if (is_face) {
+      if (is_face && has_face_texcoords) {
         result.indices.push_back(std::move(indices));
         result.texcoords.push_back(std::move(texcoords));
       }
     }
   }
+  if (!has_face_texcoords) return std::nullopt;
   return result;
 }
 
@@ -922,6 +1172,16 @@ Mesh LoadMesh(const std::string& path, double scale_to_metres) {
   std::error_code ec;
   UNSEEN_CHECK(fs::is_regular_file(path, ec), "{}: mesh file not found", path);
 
+  const std::string extension = LowerExtension(path);
+  std::optional<PlyFaceTexcoords> ply_face_texcoords;
+  if (extension == ".ply") {
+    CheckPlyHeader(path);
+    ply_face_texcoords = ReadPlyBody(path);
+  }
+  if (extension == ".obj") CheckObjIndices(path);
+  if (extension == ".dae" || extension == ".xml") CheckColladaText(path);
+  if (extension == ".gltf" || extension == ".glb") CheckGltfText(path, extension == ".glb");
+
   Assimp::Importer importer;
   // The object frame is the file's own coordinates: no Collada Z-up -> Y-up rotation.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
@@ -933,11 +1193,9 @@ Mesh LoadMesh(const std::string& path, double scale_to_metres) {
   // assimp's post-processing asserts (aborts) on some malformed data that its validation
   // lets through, e.g. faces without indices: check the raw data first.
   CheckRawScene(*scene, path);
-  if (LowerExtension(path) == ".ply") {
-    if (const auto face_texcoords = ReadPlyFaceTexcoords(path)) {
-      // The scene is the importer's to modify until post-processing.
-      ApplyPlyFaceTexcoords(*face_texcoords, path, const_cast<aiScene*>(scene));
-    }
+  if (ply_face_texcoords) {
+    // The scene is the importer's to modify until post-processing.
+    ApplyPlyFaceTexcoords(*ply_face_texcoords, path, const_cast<aiScene*>(scene));
   }
   // (No aiProcess_JoinIdenticalVertices: assimp 5.2 merges vertices whose colours differ;
   // WeldIdenticalVertices does it afterwards.)
@@ -1045,7 +1303,7 @@ Mesh LoadMesh(const std::string& path, double scale_to_metres) {
   WeldIdenticalVertices(&mesh);
 
   // BOP-style PLY: the texture is named in a header comment, not in a material.
-  if (LowerExtension(path) == ".ply" && !mesh.uvs.empty()) {
+  if (extension == ".ply" && !mesh.uvs.empty()) {
     const std::string texture_file = ReadPlyTextureComment(path);
     if (!texture_file.empty()) {
       TextureLoader files(nullptr, path);

@@ -184,8 +184,11 @@ Eigen::Vector3d ColorRgb(const Field& f) {
 
 Eigen::Vector3d Direction(const Field& f) {
   const Eigen::Vector3d d = f.Vec3();
-  if (d.norm() < 1e-12) f.Fail("direction must not be zero, got {}", f.Text());
-  return d.normalized();
+  const double norm = d.stableNorm();  // norm() overflows for components near 1e308
+  if (!(norm >= 1e-12 && std::isfinite(norm))) {
+    f.Fail("direction must be neither zero nor huge, got {}", f.Text());
+  }
+  return d / norm;
 }
 
 // Expands $NAME / ${NAME} from the environment and resolves relative paths against the
@@ -403,7 +406,8 @@ std::vector<AxisRotation> ParseRotationSteps(const Field& f) {
     s.ExpectKeys({"axis", "deg"});
     AxisRotation step;
     step.axis = Direction(s.Child("axis"));
-    step.angle_deg = s.Child("deg").Double();
+    // Bounded so that the angle in radians, and its sine and cosine, stay finite.
+    step.angle_deg = s.Child("deg").InRange(s.Child("deg").Double(), -1e6, 1e6);
     steps.push_back(step);
   }
   return steps;
@@ -445,7 +449,11 @@ std::shared_ptr<const Trajectory> ParseTrajectory(const Field& f, const Context&
       const Field s = f.Child("spin");
       s.ExpectKeys({"axis", "rate_rad_s", "frame"});
       if (s.Has("axis")) o.spin.axis = Direction(s.Child("axis"));
-      if (s.Has("rate_rad_s")) o.spin.rate_rad_s = s.Child("rate_rad_s").Double();
+      // Bounded so that the angle turned by the end of any sequence stays finite.
+      if (s.Has("rate_rad_s")) {
+        const Field rate = s.Child("rate_rad_s");
+        o.spin.rate_rad_s = rate.InRange(rate.Double(), -1e3, 1e3);
+      }
       if (s.Has("frame")) {
         const Field fr = s.Child("frame");
         const std::string frame = fr.String();
@@ -473,10 +481,13 @@ std::shared_ptr<const Trajectory> ParseTrajectory(const Field& f, const Context&
   if (type == "static") {
     f.ExpectKeys({"type", "position_mm", "rotation"});
     const Eigen::Vector3d p = Vec3Mm(f.Child("position_mm"));
-    const Eigen::Quaterniond r = f.Has("rotation")
-                                     ? ComposeRotations(ParseRotationSteps(f.Child("rotation")))
-                                     : Eigen::Quaterniond::Identity();
-    return std::make_shared<StaticTrajectory>(Rigid3d(r, p));
+    const std::vector<AxisRotation> steps =
+        f.Has("rotation") ? ParseRotationSteps(f.Child("rotation")) : std::vector<AxisRotation>();
+    try {
+      return std::make_shared<StaticTrajectory>(Rigid3d(ComposeRotations(steps), p));
+    } catch (const Error& e) {
+      f.Fail("{}", e.what());
+    }
   }
   type_field.Fail("unknown trajectory type {} (waypoints, pose_file, static)", type_field.Text());
 }

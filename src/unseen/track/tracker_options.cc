@@ -149,11 +149,18 @@ Setter EnumField(E* field, E (*parse)(const std::string&, const std::string&)) {
   };
 }
 
+// A map key as text. Throws naming `where` for a key that is not a plain name (YAML allows
+// lists and maps as keys: "? [a, b]: 1").
+std::string KeyName(const YAML::Node& key, const std::string& where) {
+  UNSEEN_CHECK(key.IsScalar(), "{}: key '{}' is not a plain name", where, YAML::Dump(key));
+  return key.Scalar();
+}
+
 void ApplySection(const YAML::Node& node, const std::string& where,
                   const std::map<std::string, Setter>& fields) {
   UNSEEN_CHECK(node.IsMap(), "{}: expected a map of settings", where);
   for (const auto& kv : node) {
-    const std::string key = kv.first.as<std::string>();
+    const std::string key = KeyName(kv.first, where);
     const auto it = fields.find(key);
     if (it == fields.end()) {
       std::string known;
@@ -305,7 +312,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
   };
   UNSEEN_CHECK(root.IsMap(), "{}: expected a map at the top level", what);
   for (const auto& kv : root) {
-    const std::string key = kv.first.as<std::string>();
+    const std::string key = KeyName(kv.first, what);
     if (key == "frame_interval_s") {
       Field(&o->frame_interval_s)(kv.second, what + ": " + key);
       continue;
