@@ -95,6 +95,7 @@ TEST_F(ModalityScene, DepthAloneRecoversThePose) {
   EXPECT_LT(e.rotation_rad, 0.5 * kDeg) << r.BriefReport();
   EXPECT_GT(r.summary.depth_equations, 100) << r.BriefReport();
   EXPECT_EQ(r.summary.counts.used, 0) << "the photometric modality was switched off";
+  EXPECT_GT(r.confidence, 0.5) << "depth alone judges the frame: " << r.BriefReport();
 }
 
 TEST_F(ModalityScene, RegionAloneTracksAnUntexturedModel) {

@@ -308,7 +308,9 @@ double Tracker::Confidence(const SolveSummary& s) const {
   if (depth_agreement < 0.0) return use_photometric_ ? photometric : region_term;
   const double depth_term =
       Ramp(depth_agreement, options_.depth.bad_agreement, options_.depth.good_agreement);
-  return depth_term * std::max(photometric, region_term);
+  // Depth alone (no image modality in use) judges by itself.
+  const bool image_judges = use_photometric_ || options_.region.enabled;
+  return depth_term * (image_judges ? std::max(photometric, region_term) : 1.0);
 }
 
 TrackResult Tracker::Align(const std::vector<cv::Mat>& images, const Rigid3d& world_from_obj,
