@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "unseen/eval/test_sequence.h"
+#include "unseen/eval/cli_testing.h"
 #include "unseen/io/pose_stream.h"
 
 namespace unseen {
@@ -21,33 +22,14 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct RunResult {
-  int exit_code = -1;
-  std::string out, err;
-};
-
 std::string TempPath(const std::string& name) {
-  return (fs::temp_directory_path() / ("unseen_eval_cli_test_" + name)).string();
+  return testing::CliTempPath("eval_cli_test", name);
 }
 
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using testing::ReadText;
+using RunResult = testing::CliResult;
 
-// Runs `unseen <args>`, capturing stdout and stderr.
-RunResult RunCli(const std::string& args) {
-  const std::string out = TempPath("stdout.txt"), err = TempPath("stderr.txt");
-  const std::string command = fmt::format("'{}' {} > '{}' 2> '{}'", UNSEEN_CLI, args, out, err);
-  const int status = std::system(command.c_str());
-  RunResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = ReadText(out);
-  r.err = ReadText(err);
-  return r;
-}
+RunResult RunCli(const std::string& args) { return testing::RunCli("eval_cli_test", args); }
 
 class EvalCli : public ::testing::Test {
  protected:
