@@ -8,12 +8,15 @@
 #   UNSEEN_FUZZ_SECONDS     fuzzing time per target (default 20)
 #   UNSEEN_FUZZ_BUILD_DIR   build folder (default build-fuzz)
 #   UNSEEN_FUZZ_TARGETS     space-separated targets to run (default: every fuzz/*_fuzzer.cc)
+#   UNSEEN_FUZZ_SEED        libFuzzer's random seed (default 1, so a CI failure can be replayed;
+#                           0 draws a new seed each run)
 #   UNSEEN_JOBS             build jobs and targets fuzzed at once (default: nproc)
 # Extra arguments go to every fuzzer (e.g. -max_len=20000).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${UNSEEN_FUZZ_BUILD_DIR:-$root/build-fuzz}"
 seconds="${UNSEEN_FUZZ_SECONDS:-20}"
+seed="${UNSEEN_FUZZ_SEED:-1}"
 jobs="${UNSEEN_JOBS:-$(nproc)}"
 start=$SECONDS
 
@@ -52,7 +55,7 @@ run_target() {
   local status=0
   "$build/fuzz/${name}_fuzzer" "${inputs[@]}" -max_total_time="$seconds" -timeout=5 \
     -rss_limit_mb=2048 -dict="$root/fuzz/numbers.dict" -artifact_prefix="$work/" \
-    -print_final_stats=1 "${@:2}" \
+    -seed="$seed" -print_final_stats=1 "${@:2}" \
     > "$work/log" 2>&1 || status=$?
   echo "$status" > "$work/status"
 }

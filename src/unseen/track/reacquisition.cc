@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 #include <opencv2/imgproc.hpp>
 
@@ -292,10 +293,17 @@ std::vector<CorrelationSeed> FindCorrelationSeeds(const std::vector<cv::Mat>& im
       seeds.push_back(seed_from({{strongest, &p}}));
     }
   }
-  std::stable_sort(seeds.begin(), seeds.end(), [](const CorrelationSeed& a,
-                                                  const CorrelationSeed& b) {
-    return a.score > b.score;
-  });
+  // Best first, ties in the order found. The order is sorted, not the seeds: libstdc++'s
+  // std::stable_sort takes its buffer from get_temporary_buffer, which ignores the
+  // over-alignment of Eigen members (32 bytes with AVX) and crashed AVX-512 builds.
+  std::vector<int> order(seeds.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&seeds](int a, int b) { return seeds[a].score > seeds[b].score; });
+  std::vector<CorrelationSeed> sorted;
+  sorted.reserve(seeds.size());
+  for (int i : order) sorted.push_back(std::move(seeds[i]));
+  seeds = std::move(sorted);
   if (static_cast<int>(seeds.size()) > options.max_seeds) seeds.resize(options.max_seeds);
   return seeds;
 }
