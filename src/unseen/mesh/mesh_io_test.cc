@@ -338,6 +338,17 @@ TEST_F(MeshIoTest, ObjMissingTextureNamesBothFiles) {
   ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "no_such_texture.png"});
 }
 
+TEST_F(MeshIoTest, ObjMaterialStatementBeforeNewmtlIsRefused) {
+  // assimp 5.2 crashes on a material statement outside any material; it also reads
+  // <stem>.mtl when the named library is missing.
+  Write("quad.mtl", "# comment\n\nmap_Kd quad.png\nnewmtl tex\n");
+  const std::string path = Write("quad.obj", kQuadObj);
+  ExpectThrowsMentioning([&] { LoadMesh(path); }, {"quad.mtl", "line 3", "newmtl"});
+  Write("fallback.mtl", "Kd 1 0 0\n");
+  const std::string fallback = Write("fallback.obj", "mtllib missing.mtl\nv 0 0 0\n");
+  ExpectThrowsMentioning([&] { LoadMesh(fallback); }, {"fallback.mtl", "line 1"});
+}
+
 // ---------------------------------------------------------------------------------------
 // PLY
 

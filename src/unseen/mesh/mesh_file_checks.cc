@@ -1,0 +1,558 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/mesh/mesh_file_checks.h"
+
+#include <assimp/mesh.h>
+#include <assimp/scene.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "unseen/util/error.h"
+
+namespace unseen::mesh_checks {
+namespace fs = std::filesystem;
+
+std::string Trim(const std::string& s) {
+  const size_t first = s.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos) return "";
+  return s.substr(first, s.find_last_not_of(" \t\r\n") + 1 - first);
+}
+
+// The whole file as text.
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  UNSEEN_CHECK(in.good(), "{}: cannot open mesh file", path);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// Checks made before assimp 5.2 reads a file, for input it does not survive.
+//
+// PLY: assimp mishandles malformed headers. Without an end_header line it loops for ever; a
+// face element without vertex indices (but e.g. texcoords) makes it dereference a null
+// pointer; lines it does not know and repeated elements have it free memory it did not
+// allocate; an element count larger than the file has it reserve gigabytes. The header is
+// checked line by line against the PLY grammar first.
+void CheckPlyHeader(const std::string& path) {
+  static const std::set<std::string> kIntegerTypes = {"char",  "uchar",  "short", "ushort",
+                                                      "int",   "uint",   "int8",  "uint8",
+                                                      "int16", "uint16", "int32", "uint32"};
+  static const std::set<std::string> kTypes = [] {
+    std::set<std::string> types = kIntegerTypes;
+    types.insert({"float", "double", "float32", "float64"});
+    return types;
+  }();
+  // Element and property names are words that do not start with a digit: assimp takes
+  // "element 4294967295vertex 4" for 4294967295 vertices.
+  const auto is_name = [](const std::string& word) {
+    return !word.empty() && !std::isdigit(static_cast<unsigned char>(word[0])) &&
+           std::all_of(word.begin(), word.end(), [](unsigned char c) {
+             return std::isalnum(c) || c == '_' || c == '-' || c == '.';
+           });
+  };
+  std::error_code ec;
+  const uintmax_t file_size = fs::file_size(path, ec);
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  bool format = false, face_indices = false;
+  std::set<std::string> elements, properties;
+  std::string element;
+  for (int n = 1; n <= 100000 && std::getline(in, line); ++n) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream stream(line);
+    const std::vector<std::string> words{std::istream_iterator<std::string>(stream),
+                                         std::istream_iterator<std::string>()};
+    const std::string keyword = words.empty() ? "" : words[0];
+    bool valid = false;
+    if (n == 1) {
+      valid = words.size() == 1 && keyword == "ply";
+    } else if (keyword == "comment" || keyword == "obj_info") {
+      valid = true;
+    } else if (keyword == "format") {
+      valid = !format && words.size() == 3 &&
+              (words[1] == "ascii" || words[1] == "binary_little_endian" ||
+               words[1] == "binary_big_endian");
+      format = true;
+    } else if (keyword == "element") {
+      const bool count_ok = words.size() == 3 && !words[2].empty() && words[2].size() <= 12 &&
+                            words[2].find_first_not_of("0123456789") == std::string::npos;
+      valid = count_ok && is_name(words[1]) && elements.insert(words[1]).second;
+      if (valid) {
+        UNSEEN_CHECK(std::stoull(words[2]) <= file_size,
+                     "{}: PLY element '{}' has {} entries, more than the file's {} bytes can hold",
+                     path, words[1], words[2], file_size);
+        element = words[1];
+        properties.clear();
+      }
+    } else if (keyword == "property" && !element.empty()) {
+      const bool list = words.size() == 5 && words[1] == "list";
+      valid = list ? kIntegerTypes.count(words[2]) && kTypes.count(words[3])
+                   : words.size() == 3 && kTypes.count(words[1]);
+      valid = valid && is_name(words.back()) && properties.insert(words.back()).second;
+      face_indices = face_indices || (element == "face" && list &&
+                                      (words[4] == "vertex_indices" || words[4] == "vertex_index"));
+    } else if (keyword == "end_header") {
+      UNSEEN_CHECK(words.size() == 1 && format, "{}: PLY header line {} is not valid: '{}'", path,
+                   n, line.substr(0, 80));
+      UNSEEN_CHECK(!elements.count("face") || face_indices,
+                   "{}: PLY element 'face' has no vertex_indices list property", path);
+      return;
+    }
+    UNSEEN_CHECK(valid, "{}: PLY header line {} is not valid: '{}'", path, n, line.substr(0, 80));
+  }
+  ThrowError("{}: PLY header has no end_header line", path);
+}
+
+// OBJ: assimp crashes on face corners that refer to normals (or uvs) the file does not
+// have. Every index of the f, l and p lines is checked: positive ones against the file's
+// counts of v, vt and vn, negative (relative) ones against those read so far.
+void CheckObjIndices(const std::string& path) {
+  const std::string text = ReadText(path);
+  const auto for_each_line = [&](const auto& visit) {
+    std::istringstream in(text);
+    std::string line;
+    for (int n = 1; std::getline(in, line); ++n) {
+      line = line.substr(0, line.find('#'));
+      std::istringstream words(line);
+      std::string keyword;
+      words >> keyword;
+      visit(n, keyword, words, line);
+    }
+  };
+  const char* kNames[3] = {"vertex", "texture coordinate", "normal"};
+  int64_t total[3] = {0, 0, 0}, so_far[3] = {0, 0, 0};
+  const auto count = [](const std::string& keyword, int64_t* counts) {
+    if (keyword == "v") ++counts[0];
+    if (keyword == "vt") ++counts[1];
+    if (keyword == "vn") ++counts[2];
+  };
+  for_each_line([&](int, const std::string& keyword, std::istream&, const std::string&) {
+    count(keyword, total);
+  });
+  for_each_line([&](int n, const std::string& keyword, std::istream& words,
+                    const std::string& line) {
+    count(keyword, so_far);
+    if (keyword != "f" && keyword != "l" && keyword != "p") return;
+    std::string corner;
+    while (words >> corner) {
+      size_t start = 0;
+      for (int k = 0; k < 3 && start <= corner.size(); ++k) {
+        const size_t slash = std::min(corner.find('/', start), corner.size());
+        const std::string index = corner.substr(start, slash - start);
+        start = slash + 1;
+        if (index.empty() && k > 0) continue;  // "1//3": no texture coordinate
+        char* end = nullptr;
+        const long long i = std::strtoll(index.c_str(), &end, 10);
+        const bool valid =
+            !index.empty() && *end == '\0' && i != 0 && (i > 0 ? i <= total[k] : -i <= so_far[k]);
+        UNSEEN_CHECK(valid, "{}: line {}: '{}' refers to {} {}, but the file has {}", path, n,
+                     line.substr(0, 80), kNames[k], index, total[k]);
+      }
+      UNSEEN_CHECK(start > corner.size(), "{}: line {}: '{}' is not v/vt/vn", path, n, corner);
+    }
+  });
+}
+
+// OBJ materials: assimp 5.2 writes a material statement (map_Kd, Kd, ...) that comes before
+// the first newmtl of a library through a null pointer. It reads the libraries the mtllib
+// lines name and, when one is missing, <stem>.mtl beside the OBJ; each of those that exists
+// may hold only comments and blank lines before its first newmtl.
+void CheckObjMaterials(const std::string& path) {
+  const fs::path obj(path);
+  std::vector<fs::path> libraries = {obj.parent_path() / (obj.stem().string() + ".mtl")};
+  std::istringstream in(ReadText(path));
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    if (keyword != "mtllib") continue;
+    std::string rest;
+    std::getline(words, rest);
+    rest = Trim(rest.substr(0, rest.find('#')));
+    if (!rest.empty()) libraries.push_back(obj.parent_path() / rest);
+  }
+  for (const fs::path& library : libraries) {
+    std::error_code ec;
+    if (!fs::is_regular_file(library, ec)) continue;
+    std::istringstream text(ReadText(library.string()));
+    for (int n = 1; std::getline(text, line); ++n) {
+      const std::string statement = Trim(line.substr(0, line.find('#')));
+      if (statement.empty()) continue;
+      std::istringstream words(statement);
+      std::string keyword;
+      words >> keyword;
+      if (keyword == "newmtl") break;
+      ThrowError("{}: line {}: '{}' comes before any newmtl (material library of {})",
+                 library.string(), n, statement.substr(0, 80), path);
+    }
+  }
+}
+
+namespace {
+
+bool IsBlank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+
+// Position just after `count =` in `text` at `at` (where "count" starts), or npos when no
+// count attribute starts there.
+size_t AfterCountAttribute(std::string_view text, size_t at) {
+  if (at == 0 || !IsBlank(text[at - 1])) return std::string::npos;  // <vcount>, "account", ...
+  size_t i = at + 5;
+  while (i < text.size() && IsBlank(text[i])) ++i;
+  if (i >= text.size() || text[i] != '=') return std::string::npos;
+  return i + 1;
+}
+
+}  // namespace
+
+// Collada: a <p> index list holding anything but integers and blanks makes assimp loop for
+// ever, a data array without a count attribute makes it dereference a null pointer, and a
+// count="N" attribute has it reserve memory for N values before it looks at them. Counts
+// are checked against the file's size (every value takes at least a byte), so that a short
+// file cannot ask for gigabytes.
+void CheckColladaText(const std::string& path) {
+  const std::string text = ReadText(path);
+  for (const char* array : {"<float_array", "<int_array", "<bool_array", "<Name_array",
+                            "<IDREF_array", "<SIDREF_array", "<token_array"}) {
+    for (size_t at = text.find(array); at != std::string::npos; at = text.find(array, at + 1)) {
+      const std::string_view tag =
+          std::string_view(text).substr(at, text.find('>', at) - at);  // to the end if no '>'
+      bool counted = false;
+      for (size_t c = tag.find("count"); c != std::string::npos && !counted;
+           c = tag.find("count", c + 1)) {
+        counted = AfterCountAttribute(tag, c) != std::string::npos;
+      }
+      UNSEEN_CHECK(counted, "{}: {}> element without a count attribute", path, array);
+    }
+  }
+  for (size_t at = text.find("count"); at != std::string::npos; at = text.find("count", at + 1)) {
+    size_t i = AfterCountAttribute(text, at);
+    if (i == std::string::npos) continue;
+    while (i < text.size() && IsBlank(text[i])) ++i;
+    if (i >= text.size() || (text[i] != '"' && text[i] != '\'')) continue;
+    const size_t close = text.find(text[i], i + 1);
+    if (close == std::string::npos) continue;
+    const std::string value = Trim(text.substr(i + 1, close - i - 1));
+    // Decimal or 0x-hexadecimal, as assimp's XML reader takes them; a sign wraps around.
+    const bool hex = value.rfind("0x", 0) == 0 || value.rfind("0X", 0) == 0;
+    const std::string digits = hex ? value.substr(2) : value;
+    const bool plain = !digits.empty() && digits.size() <= 12 &&
+                       std::all_of(digits.begin(), digits.end(), [&](unsigned char c) {
+                         return hex ? std::isxdigit(c) != 0 : std::isdigit(c) != 0;
+                       });
+    UNSEEN_CHECK(plain && std::stoull(digits, nullptr, hex ? 16 : 10) <= text.size(),
+                 "{}: count=\"{}\" is not a number of values the file can hold ({} bytes)", path,
+                 value, text.size());
+  }
+  for (size_t at = text.find("<p"); at != std::string::npos; at = text.find("<p", at + 1)) {
+    const size_t name_end = at + 2;
+    if (name_end >= text.size() || (text[name_end] != '>' && !IsBlank(text[name_end]))) continue;
+    const size_t open_end = text.find('>', name_end);
+    if (open_end == std::string::npos || text[open_end - 1] == '/') continue;
+    const size_t end = std::min(text.find('<', open_end), text.size());
+    const std::string list = text.substr(open_end + 1, end - open_end - 1);
+    const size_t bad = list.find_first_not_of("0123456789+- \t\r\n");
+    UNSEEN_CHECK(bad == std::string::npos,
+                 "{}: <p> index list holds '{}', expected integers separated by blanks", path,
+                 list.substr(bad, 20));
+  }
+}
+
+// glTF: assimp parses the JSON recursively, so that deeply nested input exhausts the
+// stack, and allocates what a .glb file's header says before it reads it. The nesting of a
+// .gltf file, or of a .glb file's JSON chunk, and the lengths in a .glb header are checked
+// first.
+void CheckGltfText(const std::string& path, bool binary) {
+  constexpr int kMaxDepth = 64;
+  const std::string text = ReadText(path);
+  std::string_view json = text;
+  if (binary) {  // "glTF", version, total length, then the JSON chunk's length, type, content
+    if (text.size() < 20 || text.compare(0, 4, "glTF") != 0) return;
+    uint32_t total = 0, json_length = 0;
+    std::memcpy(&total, text.data() + 8, sizeof(total));
+    std::memcpy(&json_length, text.data() + 12, sizeof(json_length));
+    UNSEEN_CHECK(total >= 20 && total <= text.size() && json_length <= total - 20,
+                 "{}: GLB header gives a length of {} bytes and a JSON chunk of {} bytes; the "
+                 "file has {} bytes",
+                 path, total, json_length, text.size());
+    json = json.substr(20, json_length);
+  }
+  int depth = 0;
+  bool in_string = false;
+  for (size_t i = 0; i < json.size(); ++i) {
+    const char c = json[i];
+    if (in_string) {
+      if (c == '\\') {
+        ++i;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      UNSEEN_CHECK(++depth <= kMaxDepth, "{}: glTF JSON nested deeper than {} levels", path,
+                   kMaxDepth);
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+}
+
+// Throws naming the file for faces without indices, indices out of range and non-finite
+// vertex positions in assimp's raw (not yet post-processed) scene.
+void CheckRawScene(const aiScene& scene, const std::string& path) {
+  bool any_polygon = false;
+  for (unsigned mi = 0; mi < scene.mNumMeshes; ++mi) {
+    const aiMesh& mesh = *scene.mMeshes[mi];
+    UNSEEN_CHECK(mesh.mVertices != nullptr || mesh.mNumVertices == 0,
+                 "{}: sub-mesh {} has no vertex positions", path, mi);
+    for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
+      const aiVector3D& p = mesh.mVertices[v];
+      UNSEEN_CHECK(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z),
+                   "{}: vertex {} of sub-mesh {} is not finite ({} {} {})", path, v, mi, p.x, p.y,
+                   p.z);
+    }
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+      const aiFace& face = mesh.mFaces[f];
+      UNSEEN_CHECK(face.mNumIndices > 0 && face.mIndices != nullptr,
+                   "{}: face {} of sub-mesh {} has no vertex indices", path, f, mi);
+      any_polygon = any_polygon || face.mNumIndices >= 3;
+      for (unsigned k = 0; k < face.mNumIndices; ++k) {
+        UNSEEN_CHECK(face.mIndices[k] < mesh.mNumVertices,
+                     "{}: face {} of sub-mesh {} has vertex index {} out of range [0, {})", path, f,
+                     mi, face.mIndices[k], mesh.mNumVertices);
+      }
+    }
+  }
+  UNSEEN_CHECK(any_polygon, "{}: mesh has no triangles (only points or lines)", path);
+}
+
+// Reads the body of a PLY before assimp does: checks that every list has at most 1e6
+// entries (assimp allocates what an ASCII list count says, 32 GB for "42949672950") and
+// returns the face texcoords, or std::nullopt when the faces have none. Throws naming the
+// file for a header or body it cannot parse.
+std::optional<PlyFaceTexcoords> ReadPlyBody(const std::string& path) {
+  enum class Format { kAscii, kLittle, kBig };
+  struct Property {
+    std::string name;
+    std::string type;        // scalar type, or list item type
+    std::string count_type;  // non-empty for lists
+  };
+  struct Element {
+    std::string name;
+    int64_t count = 0;
+    std::vector<Property> properties;
+  };
+  auto type_size = [&](const std::string& t) -> int {
+    if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+    if (t == "int" || t == "uint" || t == "int32" || t == "uint32" || t == "float" ||
+        t == "float32")
+      return 4;
+    if (t == "double" || t == "float64") return 8;
+    ThrowError("{}: PLY property type '{}' is not valid", path, t);
+  };
+
+  std::ifstream in(path, std::ios::binary);
+  UNSEEN_CHECK(in.good(), "{}: cannot open", path);
+  std::string line;
+  Format format = Format::kAscii;
+  std::vector<Element> elements;
+  bool has_face_texcoords = false;
+  bool header_done = false;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    if (keyword == "end_header") {
+      header_done = true;
+      break;
+    }
+    if (keyword == "format") {
+      std::string name;
+      words >> name;
+      format = name == "ascii"                  ? Format::kAscii
+               : name == "binary_little_endian" ? Format::kLittle
+               : name == "binary_big_endian"
+                   ? Format::kBig
+                   : throw Error(fmt::format("{}: unknown PLY format '{}'", path, name));
+    } else if (keyword == "element") {
+      Element e;
+      words >> e.name >> e.count;
+      UNSEEN_CHECK(!words.fail() && e.count >= 0, "{}: malformed PLY header line '{}'", path, line);
+      elements.push_back(e);
+    } else if (keyword == "property") {
+      UNSEEN_CHECK(!elements.empty(), "{}: PLY property before any element: '{}'", path, line);
+      Property p;
+      std::string type;
+      words >> type;
+      if (type == "list") {
+        words >> p.count_type >> p.type >> p.name;
+        type_size(p.count_type);
+      } else {
+        p.type = type;
+        words >> p.name;
+      }
+      type_size(p.type);
+      UNSEEN_CHECK(!words.fail(), "{}: malformed PLY header line '{}'", path, line);
+      if (elements.back().name == "face" && !p.count_type.empty() && p.name == "texcoord") {
+        has_face_texcoords = true;
+      }
+      elements.back().properties.push_back(p);
+    }
+  }
+  UNSEEN_CHECK(header_done, "{}: PLY header has no end_header", path);
+
+  auto read_value = [&](const std::string& type) -> double {
+    if (format == Format::kAscii) {
+      double value;
+      in >> value;
+      UNSEEN_CHECK(!in.fail(), "{}: PLY body ends early or holds a non-number", path);
+      return value;
+    }
+    const int size = std::clamp(type_size(type), 1, 8);
+    unsigned char bytes[8] = {};
+    in.read(reinterpret_cast<char*>(bytes), size);
+    UNSEEN_CHECK(in.gcount() == size, "{}: PLY body ends early", path);
+    if ((format == Format::kBig) == (std::endian::native == std::endian::little)) {
+      std::reverse(bytes, bytes + size);
+    }
+    auto as = [&](auto v) {
+      std::memcpy(&v, bytes, sizeof(v));
+      return static_cast<double>(v);
+    };
+    if (type == "char" || type == "int8") return as(int8_t());
+    if (type == "uchar" || type == "uint8") return as(uint8_t());
+    if (type == "short" || type == "int16") return as(int16_t());
+    if (type == "ushort" || type == "uint16") return as(uint16_t());
+    if (type == "int" || type == "int32") return as(int32_t());
+    if (type == "uint" || type == "uint32") return as(uint32_t());
+    if (type == "float" || type == "float32") return as(float());
+    return as(double());
+  };
+
+  PlyFaceTexcoords result;
+  for (const Element& e : elements) {
+    const bool is_face = e.name == "face";
+    const bool fixed_size = std::all_of(e.properties.begin(), e.properties.end(),
+                                        [](const Property& p) { return p.count_type.empty(); });
+    if (!is_face && fixed_size && format != Format::kAscii) {  // skip in one go
+      int64_t stride = 0;
+      for (const Property& p : e.properties) stride += type_size(p.type);
+      in.seekg(stride * e.count, std::ios::cur);
+      UNSEEN_CHECK(in.good(), "{}: PLY body ends early", path);
+      continue;
+    }
+    for (int64_t i = 0; i < e.count; ++i) {
+      std::vector<int64_t> indices;
+      std::vector<double> texcoords;
+      for (const Property& p : e.properties) {
+        if (p.count_type.empty()) {
+          const double value = read_value(p.type);
+          if (is_face && p.name == "texnumber" && value != 0.0) result.several_textures = true;
+          continue;
+        }
+        const double count = read_value(p.count_type);
+        UNSEEN_CHECK(count >= 0 && count <= 1e6, "{}: PLY {} {} has a list of {} entries", path,
+                     e.name, i, count);
+        const bool wanted_indices =
+            is_face && (p.name == "vertex_indices" || p.name == "vertex_index");
+        const bool wanted_texcoords = is_face && p.name == "texcoord";
+        for (int k = 0; k < static_cast<int>(count); ++k) {
+          const double value = read_value(p.type);
+          if (wanted_indices) indices.push_back(static_cast<int64_t>(value));
+          if (wanted_texcoords) texcoords.push_back(value);
+        }
+      }
+      if (is_face && has_face_texcoords) {
+        result.indices.push_back(std::move(indices));
+        result.texcoords.push_back(std::move(texcoords));
+      }
+    }
+  }
+  if (!has_face_texcoords) return std::nullopt;
+  return result;
+}
+
+// Gives every face corner of assimp's raw PLY mesh its own vertex carrying the face's
+// texture coordinates (positions, normals and colours copied).
+void ApplyPlyFaceTexcoords(const PlyFaceTexcoords& faces, const std::string& path, aiScene* scene) {
+  UNSEEN_CHECK(!faces.several_textures,
+               "{}: PLY faces use several textures (texnumber); only one is supported", path);
+  UNSEEN_CHECK(scene->mNumMeshes == 1 && scene->mMeshes[0]->mNumFaces == faces.indices.size(),
+               "{}: per-face texture coordinates do not match the faces read ({} faces in the "
+               "file)",
+               path, faces.indices.size());
+  aiMesh& mesh = *scene->mMeshes[0];
+  unsigned corners = 0;
+  for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+    const aiFace& face = mesh.mFaces[f];
+    UNSEEN_CHECK(
+        face.mNumIndices == faces.indices[f].size() &&
+            std::equal(face.mIndices, face.mIndices + face.mNumIndices, faces.indices[f].begin(),
+                       [](unsigned a, int64_t b) { return int64_t(a) == b; }),
+        "{}: face {} of the file does not match the face read", path, f);
+    UNSEEN_CHECK(faces.texcoords[f].size() == 2 * size_t(face.mNumIndices),
+                 "{}: face {} has {} texcoord values for {} corners (expected u, v per corner)",
+                 path, f, faces.texcoords[f].size(), face.mNumIndices);
+    corners += face.mNumIndices;
+  }
+  auto* vertices = new aiVector3D[corners];
+  auto* uvs = new aiVector3D[corners];
+  aiVector3D* normals = mesh.HasNormals() ? new aiVector3D[corners] : nullptr;
+  aiColor4D* colours = mesh.HasVertexColors(0) ? new aiColor4D[corners] : nullptr;
+  unsigned c = 0;
+  for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+    aiFace& face = mesh.mFaces[f];
+    for (unsigned k = 0; k < face.mNumIndices; ++k, ++c) {
+      const unsigned v = face.mIndices[k];
+      vertices[c] = mesh.mVertices[v];
+      if (normals) normals[c] = mesh.mNormals[v];
+      if (colours) colours[c] = mesh.mColors[0][v];
+      uvs[c] = aiVector3D(static_cast<float>(faces.texcoords[f][2 * k]),
+                          static_cast<float>(faces.texcoords[f][2 * k + 1]), 0.0f);
+      face.mIndices[k] = c;
+    }
+  }
+  delete[] mesh.mVertices;
+  mesh.mVertices = vertices;
+  if (normals) {
+    delete[] mesh.mNormals;
+    mesh.mNormals = normals;
+  }
+  if (colours) {
+    delete[] mesh.mColors[0];
+    mesh.mColors[0] = colours;
+  }
+  for (unsigned k = 1; k < AI_MAX_NUMBER_OF_COLOR_SETS; ++k) {
+    delete[] mesh.mColors[k];
+    mesh.mColors[k] = nullptr;
+  }
+  for (unsigned k = 0; k < AI_MAX_NUMBER_OF_TEXTURECOORDS; ++k) {
+    delete[] mesh.mTextureCoords[k];
+    mesh.mTextureCoords[k] = nullptr;
+    mesh.mNumUVComponents[k] = 0;
+  }
+  mesh.mTextureCoords[0] = uvs;
+  mesh.mNumUVComponents[0] = 2;
+  delete[] mesh.mTangents;
+  mesh.mTangents = nullptr;
+  delete[] mesh.mBitangents;
+  mesh.mBitangents = nullptr;
+  mesh.mNumVertices = corners;
+}
+
+}  // namespace unseen::mesh_checks
