@@ -12,6 +12,7 @@
 #include "unseen/eval/sequence_poses.h"
 #include "unseen/io/sequence.h"
 #include "unseen/util/error.h"
+#include "unseen/util/files.h"
 
 namespace unseen::cli {
 namespace {
@@ -27,8 +28,8 @@ struct EvalArgs {
 
 void RunEval(const EvalArgs& args) {
   namespace fs = std::filesystem;
-  UNSEEN_CHECK(fs::exists(args.sequence), "eval: sequence '{}' does not exist", args.sequence);
-  UNSEEN_CHECK(fs::is_regular_file(args.poses), "eval: pose file '{}' does not exist", args.poses);
+  UNSEEN_CHECK(Exists(args.sequence), "eval: sequence '{}' does not exist", args.sequence);
+  UNSEEN_CHECK(IsFile(args.poses), "eval: pose file '{}' does not exist", args.poses);
   const Sequence sequence = Sequence::Open(args.sequence);
   const std::vector<GroundTruthFrame> ground_truth = SequenceGroundTruth(sequence);
   const std::vector<PoseRecord> poses = ReadPosesForSequence(args.poses, sequence, args.bop_camera);

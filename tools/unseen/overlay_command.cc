@@ -14,6 +14,7 @@
 #include "unseen/eval/sequence_poses.h"
 #include "unseen/io/sequence.h"
 #include "unseen/util/error.h"
+#include "unseen/util/files.h"
 #include "unseen/util/logging.h"
 
 namespace unseen::cli {
@@ -32,8 +33,8 @@ struct OverlayArgs {
 
 void RunOverlay(const OverlayArgs& args) {
   namespace fs = std::filesystem;
-  UNSEEN_CHECK(fs::exists(args.sequence), "overlay: sequence '{}' does not exist", args.sequence);
-  UNSEEN_CHECK(fs::is_regular_file(args.poses), "overlay: pose file '{}' does not exist",
+  UNSEEN_CHECK(Exists(args.sequence), "overlay: sequence '{}' does not exist", args.sequence);
+  UNSEEN_CHECK(IsFile(args.poses), "overlay: pose file '{}' does not exist",
                args.poses);
   UNSEEN_CHECK(std::isfinite(args.fps) && args.fps >= 0.0,
                "overlay: --fps must be > 0 (or 0 for the sequence's), got {}", args.fps);

@@ -25,6 +25,7 @@
 #include "unseen/mesh/mesh_io.h"
 #include "unseen/track/tracker.h"
 #include "unseen/util/error.h"
+#include "unseen/util/files.h"
 #include "unseen/util/logging.h"
 #include "unseen/util/progress.h"
 #include "unseen/util/timer.h"
@@ -83,7 +84,7 @@ Rigid3d ParsePose(const std::string& text) {
 
 void RunTrack(const TrackArgs& args) {
   namespace fs = std::filesystem;
-  UNSEEN_CHECK(fs::exists(args.sequence), "track: sequence '{}' does not exist", args.sequence);
+  UNSEEN_CHECK(Exists(args.sequence), "track: sequence '{}' does not exist", args.sequence);
   UNSEEN_CHECK(std::isfinite(args.model_scale) && args.model_scale > 0.0,
                "track: --model-scale {} must be > 0", args.model_scale);
   UNSEEN_CHECK(args.model_units == "mm" || args.model_units == "m",

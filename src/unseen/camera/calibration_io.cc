@@ -14,13 +14,14 @@
 #include <yaml-cpp/yaml.h>
 
 #include "unseen/util/error.h"
+#include "unseen/util/files.h"
 
 namespace unseen {
 
 namespace {
 
 std::string ReadText(const std::string& path) {
-  UNSEEN_CHECK(std::filesystem::is_regular_file(path), "{}: calibration file not found", path);
+  UNSEEN_CHECK(IsFile(path), "{}: calibration file not found", path);
   std::ifstream in(path, std::ios::binary);
   UNSEEN_CHECK(in.good(), "{}: cannot open calibration file", path);
   std::stringstream buffer;
@@ -308,7 +309,7 @@ void SaveOpenCvCalibration(const std::string& path, const PinholeCamera& camera)
   } catch (const cv::Exception& e) {
     ThrowError("{}: cannot write calibration file: {}", path, e.what());
   }
-  UNSEEN_CHECK(std::filesystem::is_regular_file(path), "{}: calibration file was not written",
+  UNSEEN_CHECK(IsFile(path), "{}: calibration file was not written",
                path);
 }
 

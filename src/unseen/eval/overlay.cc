@@ -13,6 +13,7 @@
 
 #include "unseen/io/sequence.h"
 #include "unseen/util/error.h"
+#include "unseen/util/files.h"
 #include "unseen/util/logging.h"
 #include "unseen/util/progress.h"
 
@@ -143,7 +144,7 @@ OverlaySink::OverlaySink(const std::string& path, double fps, cv::Size size)
     const int fourcc = ext == ".mp4" ? cv::VideoWriter::fourcc('m', 'p', '4', 'v')
                                      : cv::VideoWriter::fourcc('M', 'J', 'P', 'G');
     const fs::path parent = fs::absolute(path).parent_path();
-    UNSEEN_CHECK(fs::is_directory(parent), "overlay '{}': the folder '{}' does not exist", path,
+    UNSEEN_CHECK(IsFolder(parent), "overlay '{}': the folder '{}' does not exist", path,
                  parent.string());
     video_ = std::make_unique<Video>();
     // FFmpeg first (it writes both containers); then whatever backend OpenCV has.
@@ -157,12 +158,12 @@ OverlaySink::OverlaySink(const std::string& path, double fps, cv::Size size)
                  "PNG frames",
                  path, ext == ".mp4" ? "mp4v" : "MJPG", size.width, size.height, fps);
   } else {
-    UNSEEN_CHECK(ext.empty() || fs::is_directory(path),
+    UNSEEN_CHECK(ext.empty() || IsFolder(path),
                  "overlay '{}': unknown extension '{}', expected .mp4, .avi or a folder", path,
                  ext);
     std::error_code ec;
     fs::create_directories(path, ec);
-    UNSEEN_CHECK(fs::is_directory(path), "overlay '{}': cannot create the folder ({})", path,
+    UNSEEN_CHECK(IsFolder(path), "overlay '{}': cannot create the folder ({})", path,
                  ec.message());
   }
 }

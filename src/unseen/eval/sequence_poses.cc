@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "unseen/util/error.h"
+#include "unseen/util/files.h"
 
 namespace unseen {
 
@@ -34,7 +35,7 @@ bool IsBopSceneGt(const std::string& path) {
 std::vector<PoseRecord> ReadPosesForSequence(const std::string& path, const Sequence& sequence,
                                              const std::string& bop_camera) {
   namespace fs = std::filesystem;
-  UNSEEN_CHECK(fs::is_regular_file(path), "poses '{}': no such file", path);
+  UNSEEN_CHECK(IsFile(path), "poses '{}': no such file", path);
   if (!IsBopSceneGt(path)) return ReadPoseStream(path);
 
   const Rig& rig = sequence.rig();

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "unseen/util/error.h"
+#include "unseen/util/files.h"
 
 namespace unseen {
 
@@ -31,7 +32,7 @@ cv::Mat ToFloatBgr(const cv::Mat& image, const std::string& what) {
 }
 
 cv::Mat LoadColorImage(const std::string& path) {
-  UNSEEN_CHECK(std::filesystem::is_regular_file(path), "{}: image file not found", path);
+  UNSEEN_CHECK(IsFile(path), "{}: image file not found", path);
   const cv::Mat raw = cv::imread(path, cv::IMREAD_ANYCOLOR | cv::IMREAD_ANYDEPTH);
   UNSEEN_CHECK(!raw.empty(), "{}: not a readable image", path);
   return ToFloatBgr(raw, path);

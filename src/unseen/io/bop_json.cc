@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "unseen/util/error.h"
+#include "unseen/util/files.h"
 
 namespace unseen::bop {
 
@@ -39,7 +40,7 @@ nlohmann::json ParseJson(std::string_view text, const std::string& what) {
 }
 
 nlohmann::json ReadJsonFile(const std::string& path) {
-  UNSEEN_CHECK(std::filesystem::is_regular_file(path), "{}: file not found", path);
+  UNSEEN_CHECK(IsFile(path), "{}: file not found", path);
   std::ifstream in(path, std::ios::binary);
   UNSEEN_CHECK(in.good(), "{}: cannot open file", path);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -13,6 +13,7 @@
 
 #include "unseen/io/bop_json.h"
 #include "unseen/util/error.h"
+#include "unseen/util/files.h"
 
 namespace unseen {
 
@@ -253,7 +254,7 @@ void WritePoseStream(const std::string& path, const std::vector<PoseRecord>& rec
 }
 
 std::vector<PoseRecord> ReadPoseStream(const std::string& path) {
-  UNSEEN_CHECK(std::filesystem::is_regular_file(path), "{}: pose stream file not found", path);
+  UNSEEN_CHECK(IsFile(path), "{}: pose stream file not found", path);
   std::ifstream in(path);
   UNSEEN_CHECK(in.good(), "{}: cannot open pose stream file", path);
   // The format is told by the content: JSON lines start with '{', CSV with its header.

@@ -21,6 +21,7 @@
 #include "unseen/io/bop_json.h"
 #include "unseen/mesh/mesh_io.h"
 #include "unseen/util/error.h"
+#include "unseen/util/files.h"
 #include "unseen/util/logging.h"
 
 namespace unseen {
@@ -219,7 +220,7 @@ CameraSource ReadBopCamera(const std::string& name, const fs::path& dir, bool st
   // Images: rgb/<id>.png|.jpg, one per frame of scene_camera.json. A frame without its
   // file (a dropped frame) gets the path it should have had: reading it fails, naming it.
   const fs::path rgb_dir = dir / "rgb";
-  UNSEEN_CHECK(fs::is_directory(rgb_dir), "{}: image folder not found", rgb_dir.string());
+  UNSEEN_CHECK(IsFolder(rgb_dir), "{}: image folder not found", rgb_dir.string());
   const std::map<int, std::string> images = ListFrameFiles(rgb_dir, {".png", ".jpg", ".jpeg"});
   std::vector<int> missing;
   std::string first_present;
@@ -246,7 +247,7 @@ CameraSource ReadBopCamera(const std::string& name, const fs::path& dir, bool st
         missing.size() > 5 ? ", ..." : "");
   }
   const fs::path depth_dir = dir / "depth";
-  if (fs::is_directory(depth_dir)) {
+  if (IsFolder(depth_dir)) {
     const std::map<int, std::string> depths = ListFrameFiles(depth_dir, {".png"});
     int missing_depth = 0;
     for (int id : *frame_ids) {
@@ -289,7 +290,7 @@ int FirstObjectId(const std::string& gt_file) {
 // checked for an integer obj_id). Frame ids must be frames of scene_camera.json.
 void ReadGroundTruth(int obj_id, const std::vector<int>& frame_ids, CameraSource* source) {
   const std::string gt_file = (fs::path(source->dir) / "scene_gt.json").string();
-  if (!fs::exists(gt_file)) return;
+  if (!Exists(gt_file)) return;
   const json gt = bop::ReadJsonFile(gt_file);
   UNSEEN_CHECK(gt.is_object(), "{}: expected a JSON object keyed by frame id", gt_file);
   std::map<int, int> index_of;
@@ -320,7 +321,7 @@ std::string FindModel(const std::vector<fs::path>& dirs, int obj_id) {
   for (const fs::path& dir : dirs) {
     for (const char* ext : {".ply", ".obj", ".gltf", ".glb"}) {
       const fs::path p = dir / fmt::format("obj_{:06d}{}", obj_id, ext);
-      if (fs::is_regular_file(p)) return fs::absolute(p).lexically_normal().string();
+      if (IsFile(p)) return fs::absolute(p).lexically_normal().string();
     }
   }
   return "";
@@ -387,7 +388,7 @@ Sequence& Sequence::operator=(Sequence&&) noexcept = default;
 Sequence::~Sequence() = default;
 
 Sequence Sequence::Open(const std::string& path) {
-  UNSEEN_CHECK(fs::is_directory(path), "{}: sequence folder not found", path);
+  UNSEEN_CHECK(IsFolder(path), "{}: sequence folder not found", path);
   auto impl = std::make_unique<Impl>();
   impl->kind = Kind::kBop;
   impl->path = path;
@@ -399,7 +400,7 @@ Sequence Sequence::Open(const std::string& path) {
   std::string reference_name;
   std::optional<int> declared_obj_id;
   std::string declared_model;
-  const bool has_sequence_file = fs::is_regular_file(sequence_file);
+  const bool has_sequence_file = IsFile(sequence_file);
   if (has_sequence_file) {
     const std::string file = sequence_file.string();
     const json seq = bop::ReadJsonFile(file);
@@ -416,7 +417,7 @@ Sequence Sequence::Open(const std::string& path) {
       UNSEEN_CHECK(std::find(names.begin(), names.end(), name) == names.end(),
                    "{}: field \"cameras\" names \"{}\" twice", file, name);
       const fs::path dir = root / name;
-      UNSEEN_CHECK(fs::is_directory(dir), "{}: camera \"{}\" has no folder {}", file, name,
+      UNSEEN_CHECK(IsFolder(dir), "{}: camera \"{}\" has no folder {}", file, name,
                    dir.string());
       names.push_back(name);
       dirs.push_back(dir);
@@ -450,13 +451,13 @@ Sequence Sequence::Open(const std::string& path) {
                      object["model"].dump());
         declared_model = object["model"].get<std::string>();
         const fs::path model = root / declared_model;
-        UNSEEN_CHECK(fs::is_regular_file(model), "{}: field \"object.model\": file {} not found",
+        UNSEEN_CHECK(IsFile(model), "{}: field \"object.model\": file {} not found",
                      file, model.string());
         impl->model_path = fs::absolute(model).lexically_normal().string();
       }
     }
   } else {
-    UNSEEN_CHECK(fs::is_regular_file(root / "scene_camera.json"),
+    UNSEEN_CHECK(IsFile(root / "scene_camera.json"),
                  "{}: not a sequence folder (neither sequence.json nor scene_camera.json found)",
                  path);
     std::string name = fs::absolute(root).lexically_normal().filename().string();
@@ -496,7 +497,7 @@ Sequence Sequence::Open(const std::string& path) {
     for (size_t i = 0; i < names.size(); ++i) order.push_back(i);
     for (size_t i : order) {
       const fs::path gt = dirs[i] / "scene_gt.json";
-      if (fs::exists(gt)) {
+      if (Exists(gt)) {
         impl->obj_id = FirstObjectId(gt.string());
         if (impl->obj_id != 0) break;
       }
@@ -521,7 +522,7 @@ Sequence Sequence::Open(const std::string& path) {
 }
 
 Sequence Sequence::OpenVideo(const std::string& path, const PinholeCamera& camera, double fps) {
-  UNSEEN_CHECK(fs::is_regular_file(path), "{}: video file not found", path);
+  UNSEEN_CHECK(IsFile(path), "{}: video file not found", path);
   UNSEEN_CHECK(std::isfinite(fps) && fps > 0.0, "{}: fps {} must be positive", path, fps);
   auto impl = std::make_unique<Impl>();
   impl->kind = Kind::kVideo;
@@ -560,7 +561,7 @@ Sequence Sequence::OpenVideo(const std::string& path, const PinholeCamera& camer
 
 Sequence Sequence::OpenImageFolder(const std::string& path, const PinholeCamera& camera,
                                    double fps) {
-  UNSEEN_CHECK(fs::is_directory(path), "{}: image folder not found", path);
+  UNSEEN_CHECK(IsFolder(path), "{}: image folder not found", path);
   UNSEEN_CHECK(std::isfinite(fps) && fps > 0.0, "{}: fps {} must be positive", path, fps);
   auto impl = std::make_unique<Impl>();
   impl->kind = Kind::kImageFolder;

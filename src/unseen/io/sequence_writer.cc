@@ -14,6 +14,7 @@
 #include "unseen/io/sequence.h"
 #include "unseen/mesh/mesh_io.h"
 #include "unseen/util/error.h"
+#include "unseen/util/files.h"
 #include "unseen/util/logging.h"
 
 namespace unseen {
@@ -291,12 +292,12 @@ void SequenceWriter::Finish() {
     const fs::path cam_dir = w.CameraDir(c);
     // A camera with depth needs a depth image for every frame: frames written without one
     // get an all-zero image (no measurement).
-    if (fs::is_directory(cam_dir / "depth")) {
+    if (IsFolder(cam_dir / "depth")) {
       const PinholeCamera& k = w.rig.cameras[c].intrinsics;
       const cv::Mat none(k.height, k.width, CV_16UC1, cv::Scalar(0));
       for (int frame_id : w.frames_written) {
         const fs::path file = cam_dir / "depth" / (bop::FrameName(frame_id) + ".png");
-        if (fs::exists(file)) continue;
+        if (Exists(file)) continue;
         UNSEEN_CHECK(cv::imwrite(file.string(), none), "{}: could not write depth", file.string());
       }
     }

@@ -34,6 +34,7 @@
 #include "unseen/image/image_io.h"
 #include "unseen/mesh/mesh_file_checks.h"
 #include "unseen/util/error.h"
+#include "unseen/util/files.h"
 
 namespace unseen {
 namespace {
@@ -265,7 +266,7 @@ std::vector<Projector> ReadProjectors(const fs::path& json_path) {
 
     const std::string image_name = GetField<std::string>(p, "image", file, where);
     const fs::path image_path = json_path.parent_path() / image_name;
-    UNSEEN_CHECK(fs::is_regular_file(image_path), "{}: {}.image '{}' not found", file, where,
+    UNSEEN_CHECK(IsFile(image_path), "{}: {}.image '{}' not found", file, where,
                  image_path.string());
     projector.image = LoadColorImage(image_path.string());
     UNSEEN_CHECK(projector.image.cols == cam.width && projector.image.rows == cam.height,

@@ -15,6 +15,7 @@
 #include "unseen/mesh/mesh_io.h"
 #include "unseen/mesh/primitives.h"
 #include "unseen/util/error.h"
+#include "unseen/util/files.h"
 
 namespace unseen {
 
@@ -222,7 +223,7 @@ std::string FilePath(const Field& f, const Context& ctx) {
   }
   std::filesystem::path p(out);
   if (p.is_relative()) p = std::filesystem::path(ctx.base_dir) / p;
-  if (!std::filesystem::exists(p)) f.Fail("file '{}' does not exist", p.string());
+  if (!Exists(p)) f.Fail("file '{}' does not exist", p.string());
   return p.lexically_normal().string();
 }
 
