@@ -1,11 +1,16 @@
 #!/usr/bin/env bash
-# Fuzzes every reader of outside input for a bounded time (README "Fuzzing"): installs what
+# Fuzzes every reader of outside input for a bounded effort (README "Fuzzing"): installs what
 # is missing, builds the libFuzzer targets of fuzz/ with clang, AddressSanitizer and UBSan in
 # their own build folder, then runs each on a copy of its seed corpus and its regression
 # inputs. Prints one line per target; exits non-zero when any target finds a crash, a hang,
 # a leak or a sanitizer report (the input is kept in <build>/fuzz-runs/<target>/).
 #
-#   UNSEEN_FUZZ_SECONDS     fuzzing time per target (default 20)
+#   UNSEEN_FUZZ_RUNS        "budget" (default): each target runs its number of inputs from
+#                           fuzz/budgets.txt (about 20 s each on a 2-core machine); with the
+#                           fixed seed, runs on any machine explore much the same inputs.
+#                           "time": each runs for UNSEEN_FUZZ_SECONDS instead (explore).
+#   UNSEEN_FUZZ_SECONDS     fuzzing time per target in "time" mode (default 20); in "budget"
+#                           mode a target stops after 3x this time whatever its budget
 #   UNSEEN_FUZZ_BUILD_DIR   build folder (default build-fuzz)
 #   UNSEEN_FUZZ_TARGETS     space-separated targets to run (default: every fuzz/*_fuzzer.cc)
 #   UNSEEN_FUZZ_SEED        libFuzzer's random seed (default 1, so a CI failure can be replayed;
@@ -17,6 +22,11 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${UNSEEN_FUZZ_BUILD_DIR:-$root/build-fuzz}"
 seconds="${UNSEEN_FUZZ_SECONDS:-20}"
 seed="${UNSEEN_FUZZ_SEED:-1}"
+mode="${UNSEEN_FUZZ_RUNS:-budget}"
+if [ "$mode" != budget ] && [ "$mode" != time ]; then
+  echo "unseen: UNSEEN_FUZZ_RUNS must be 'budget' or 'time', not '$mode'" >&2
+  exit 2
+fi
 jobs="${UNSEEN_JOBS:-$(nproc)}"
 start=$SECONDS
 
@@ -52,15 +62,30 @@ run_target() {
   cp -r "$root/fuzz/corpus/$name/." "$work/corpus/"
   local inputs=("$work/corpus")
   if [ -d "$root/fuzz/regressions/$name" ]; then inputs+=("$root/fuzz/regressions/$name"); fi
+  local limits=(-max_total_time="$seconds")
+  if [ "$mode" = budget ]; then
+    local runs
+    runs="$(awk -v t="$name" '$1 == t { print $2 }' "$root/fuzz/budgets.txt")"
+    if [ -z "$runs" ]; then
+      echo "unseen: fuzz/budgets.txt has no budget for '$name'" > "$work/log"
+      echo 2 > "$work/status"
+      return
+    fi
+    limits=(-runs="$runs" -max_total_time="$((3 * seconds))")
+  fi
   local status=0
-  "$build/fuzz/${name}_fuzzer" "${inputs[@]}" -max_total_time="$seconds" -timeout=5 \
+  "$build/fuzz/${name}_fuzzer" "${inputs[@]}" "${limits[@]}" -timeout=5 \
     -rss_limit_mb=2048 -dict="$root/fuzz/numbers.dict" -artifact_prefix="$work/" \
     -seed="$seed" -print_final_stats=1 "${@:2}" \
     > "$work/log" 2>&1 || status=$?
   echo "$status" > "$work/status"
 }
 
-echo "== Fuzzing ${#targets[@]} targets for ${seconds} s each, ${jobs} at a time"
+if [ "$mode" = budget ]; then
+  echo "== Fuzzing ${#targets[@]} targets, each its budget of inputs (fuzz/budgets.txt), seed $seed, ${jobs} at a time"
+else
+  echo "== Fuzzing ${#targets[@]} targets for ${seconds} s each, seed $seed, ${jobs} at a time"
+fi
 running=0
 for name in "${targets[@]}"; do
   if [ ! -x "$build/fuzz/${name}_fuzzer" ]; then

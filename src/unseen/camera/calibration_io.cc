@@ -152,6 +152,11 @@ void CheckNesting(const std::string& path, const std::string& text) {
 }
 
 PinholeCamera LoadOpenCvText(const std::string& path, const std::string& text) {
+  // A text format never holds a NUL byte; OpenCV 4.6's XML parser reads through a null
+  // pointer on some that do.
+  const size_t nul = text.find('\0');
+  UNSEEN_CHECK(nul == std::string::npos, "{}: binary data (a NUL byte at byte {}) in a text file",
+               path, nul);
   CheckNesting(path, text);
   try {
     std::string content = text;

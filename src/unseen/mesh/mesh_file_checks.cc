@@ -13,11 +13,13 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "unseen/util/error.h"
@@ -214,6 +216,19 @@ size_t AfterCountAttribute(std::string_view text, size_t at) {
   if (i >= text.size() || text[i] != '=') return std::string::npos;
   return i + 1;
 }
+
+// The range of a PLY integer type; +-infinity for the floating-point types.
+std::pair<double, double> IntegerRange(const std::string& type) {
+  if (type == "char" || type == "int8") return {-128.0, 127.0};
+  if (type == "uchar" || type == "uint8") return {0.0, 255.0};
+  if (type == "short" || type == "int16") return {-32768.0, 32767.0};
+  if (type == "ushort" || type == "uint16") return {0.0, 65535.0};
+  if (type == "int" || type == "int32") return {-2147483648.0, 2147483647.0};
+  if (type == "uint" || type == "uint32") return {0.0, 4294967295.0};
+  const double inf = std::numeric_limits<double>::infinity();
+  return {-inf, inf};
+}
+
 
 }  // namespace
 
@@ -421,6 +436,11 @@ std::optional<PlyFaceTexcoords> ReadPlyBody(const std::string& path) {
       double value;
       in >> value;
       UNSEEN_CHECK(!in.fail(), "{}: PLY body ends early or holds a non-number", path);
+      // assimp converts integers with wrap-around: a count or index beyond its type's range
+      // becomes an arbitrary (e.g. gigabyte) size.
+      const auto [lo, hi] = IntegerRange(type);
+      UNSEEN_CHECK(!(value < lo || value > hi), "{}: PLY value {} does not fit its type {}", path,
+                   value, type);
       return value;
     }
     const int size = std::clamp(type_size(type), 1, 8);
