@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "unseen/eval/sequence_poses.h"
 #include "unseen/eval/test_sequence.h"
 #include "unseen/eval/cli_testing.h"
 #include "unseen/io/pose_stream.h"
@@ -79,6 +80,33 @@ TEST_F(EvalCli, JsonOutputHasTheKnownErrors) {
   EXPECT_NEAR(j["max_rot_err_deg"].get<double>(), 0.0, 1e-3);
   EXPECT_EQ(j["first_failure_frame"].get<int>(), 3);
   EXPECT_NEAR(j["fps"].get<double>(), 25.0, 1e-9);
+}
+
+TEST_F(EvalCli, GroundTruthAuditScoresTheTrustedFramesOnly) {
+  // Frames 3 and 4 have ground truth 3 cm behind the surface their depth shows.
+  const std::string dir = testing::WriteRgbdTestSequence(TempPath("rgbd"), 5, 3);
+  const std::string poses = TempPath("rgbd_poses.csv");
+  WritePoseStream(poses, testing::PerfectPoseStream(SequenceGroundTruth(Sequence::Open(dir))));
+  const RunResult audited = RunCli(fmt::format("eval '{}' '{}' --json --audit-gt", dir, poses));
+  ASSERT_EQ(audited.exit_code, 0) << audited.err;
+  const nlohmann::json a = nlohmann::json::parse(audited.out);
+  EXPECT_EQ(a["frames"].get<int>(), 5);
+  EXPECT_EQ(a["ground_truth_audit"]["trusted"].get<int>(), 3);
+  EXPECT_EQ(a["ground_truth_audit"]["depth_agreement"].size(), 5u);
+  const RunResult trusted = RunCli(fmt::format("eval '{}' '{}' --trusted-gt", dir, poses));
+  ASSERT_EQ(trusted.exit_code, 0) << trusted.err;
+  EXPECT_NE(trusted.out.find("3 trusted"), std::string::npos) << trusted.out;
+  EXPECT_NE(trusted.out.find("frames with ground truth         3"), std::string::npos)
+      << trusted.out;
+  const RunResult plain = RunCli(fmt::format("eval '{}' '{}' --json", dir, poses));
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_FALSE(nlohmann::json::parse(plain.out).contains("ground_truth_audit"));
+  // A sequence without depth cannot be audited.
+  const RunResult no_depth = RunCli(fmt::format("eval '{}' '{}' --audit-gt", seq_.dir, poses_));
+  EXPECT_NE(no_depth.exit_code, 0);
+  EXPECT_NE(no_depth.err.find("no depth"), std::string::npos) << no_depth.err;
+  fs::remove_all(dir);
+  fs::remove(poses);
 }
 
 TEST_F(EvalCli, TableAndPerFrameCsv) {

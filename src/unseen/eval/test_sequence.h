@@ -72,6 +72,38 @@ inline TestSequence WriteTestSequence(const std::string& dir, int frames,
   return seq;
 }
 
+// Writes to `dir` (replaced) an RGB-D sequence of the test cube before a wall 1 m away; the ground truth of frames
+// `first_wrong` on is written 3 cm deeper than where the cube is.
+inline std::string WriteRgbdTestSequence(const std::string& dir, int frames, int first_wrong) {
+  std::filesystem::remove_all(dir);
+  const Rig rig = TestRig();
+  const Mesh mesh = MakeLetteredCube(0.06, 32);
+  SequenceWriterOptions options;
+  options.fps = 25.0;
+  SequenceWriter writer(dir, rig, options);
+  writer.WriteModel(mesh);
+  const RigCamera& camera = rig.cameras[0];
+  for (int i = 0; i < frames; ++i) {
+    const Rigid3d cam_from_obj(ExpSO3(Eigen::Vector3d(0.5 + 0.05 * i, 0.3 - 0.1 * i, 0.1)),
+                               Eigen::Vector3d(-0.03 + 0.01 * i, 0.01, 0.45));
+    RenderBuffers buffers;
+    Render(mesh, camera.intrinsics, cam_from_obj, camera.intrinsics.ImageRect(), {}, &buffers);
+    cv::Mat image(camera.intrinsics.height, camera.intrinsics.width, CV_32FC3,
+                  cv::Scalar(0.5, 0.5, 0.5));
+    buffers.color.copyTo(image, buffers.mask);
+    cv::Mat depth(camera.intrinsics.height, camera.intrinsics.width, CV_32FC1, cv::Scalar(1.0));
+    buffers.depth.copyTo(depth, buffers.mask);
+    Rigid3d written = cam_from_obj;
+    if (i >= first_wrong) {
+      written = Rigid3d(cam_from_obj.rotation(),
+                        cam_from_obj.translation() + Eigen::Vector3d(0.0, 0.0, 0.03));
+    }
+    writer.WriteFrame(i, {image}, {depth}, camera.world_from_cam * written);
+  }
+  writer.Finish();
+  return dir;
+}
+
 // A pose stream that reports every ground-truth pose exactly (30 fps time stamps), with
 // `process_ms` as each record's timing when given.
 inline std::vector<PoseRecord> PerfectPoseStream(const std::vector<GroundTruthFrame>& gt,
