@@ -140,6 +140,30 @@ TEST_F(ModalityScene, AModelWhoseColoursDisagreeTracksByItsSilhouette) {
   EXPECT_TRUE(matching.photometric_in_use());
 }
 
+TEST_F(ModalityScene, AnAppearanceThatDragsTheFirstPoseIsDropped) {
+  // As above, with the fit check off: the second first-frame check sees the photometric
+  // term move the given pose much further than the silhouette alone does.
+  const Mesh textured = MakeLetteredCube(0.096, 64);
+  TrackerOptions options;
+  options.photometric.min_start_fit = 0.0;
+  Tracker tracker(rig_, textured, options);
+  tracker.Initialize(truth_);
+  Frame colour_only;
+  colour_only.images = frame_.images;
+  TrackResult r = tracker.Track(colour_only);
+  EXPECT_FALSE(tracker.photometric_in_use()) << r.BriefReport();
+  for (int k = 0; k < 3; ++k) r = tracker.Track(colour_only);
+  const PoseDifference e = Difference(r.world_from_obj, truth_);
+  EXPECT_LT(e.translation, 0.004) << r.BriefReport();
+  EXPECT_LT(e.rotation_rad, 1.0 * kDeg) << r.BriefReport();
+  // Off, the photometric modality stays (and drags).
+  options.photometric.start_drag_px = 0.0;
+  Tracker unchecked(rig_, textured, options);
+  unchecked.Initialize(truth_);
+  unchecked.Track(colour_only);
+  EXPECT_TRUE(unchecked.photometric_in_use());
+}
+
 TEST_F(ModalityScene, AllModalitiesTogether) {
   const Mesh textured = MakeLetteredCube(0.096, 128);
   Frame frame;
@@ -241,6 +265,12 @@ TEST(ModalityOptions, CheckRejectsNonsense) {
   EXPECT_EQ(options.region.line_px, 8);
   EXPECT_THROW(ParseTrackerOptions("region: {line_px: 0}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("depth: {colour: 1}\n"), Error);
+  const TrackerOptions drag =
+      ParseTrackerOptions("photometric: {start_drag_px: 5, start_drag_ratio: 3}\n");
+  EXPECT_EQ(drag.photometric.start_drag_px, 5.0);
+  EXPECT_EQ(drag.photometric.start_drag_ratio, 3.0);
+  EXPECT_THROW(ParseTrackerOptions("photometric: {start_drag_ratio: 0.5}\n"), Error);
+  EXPECT_THROW(ParseTrackerOptions("photometric: {start_drag_px: -1}\n"), Error);
 }
 
 }  // namespace

@@ -642,6 +642,55 @@ TrackResult Tracker::AlignPredicted(const Frame& frame, const Rigid3d& predicted
   return r;
 }
 
+TrackResult Tracker::AlignFirstFrame(const Frame& frame, const Rigid3d& given) {
+  TrackResult r = AlignPredicted(frame, given);
+  const RegionModalityOptions& ro = options_.region;
+  const PhotometricOptions& po = options_.photometric;
+  if (!use_photometric_ || !ro.enabled) return r;
+  const StageTimes joint_times = r.summary.times;
+  if (PhotometricFit(r.summary) < po.min_start_fit &&
+      r.summary.start_region_counts.EdgeShare() >= ro.min_start_edge_share) {
+    // At the pose it was given, the image has an edge along most of the silhouette (the
+    // object is there) but the model's appearance does not fit it (wrong colours,
+    // highlights the model lacks): the optical flow would drag the pose away. The
+    // silhouette tracks it instead.
+    UNSEEN_LOG_INFO("tracker: the model's appearance does not fit the first frame (fit {:.2f} "
+                    "< {:.2f}); tracking by its silhouette",
+                    PhotometricFit(r.summary), po.min_start_fit);
+    use_photometric_ = false;
+    r = AlignPredicted(frame, given);
+    r.summary.times += joint_times;
+    return r;
+  }
+  if (po.start_drag_px <= 0.0) return r;
+  // The given pose is taken to be close. Where the model's colours are shaded unlike the
+  // image (another renderer, a real camera), the composed virtual image fits best with a
+  // smaller model (the input shows wherever the model does not), so the photometric term
+  // drags the object away, typically deeper; the silhouette alone does not.
+  // What the joint alignment left for the next frames (its correction, the colour samples
+  // it learnt) is kept unless the silhouette's result replaces it.
+  const double joint_recent_correction_px = recent_correction_px_;
+  const std::vector<ColorHistograms> joint_histograms = histograms_;
+  use_photometric_ = false;
+  TrackResult by_silhouette = AlignPredicted(frame, given);
+  use_photometric_ = true;
+  const double joint_px = r.summary.correction_px;
+  const double silhouette_px = by_silhouette.summary.correction_px;
+  if (joint_px > po.start_drag_px && joint_px > po.start_drag_ratio * silhouette_px &&
+      by_silhouette.confidence > 0.0) {
+    UNSEEN_LOG_INFO("tracker: the model's appearance drags the first frame's pose {:.1f} px "
+                    "(the silhouette alone {:.1f} px); tracking by its silhouette",
+                    joint_px, silhouette_px);
+    use_photometric_ = false;
+    by_silhouette.summary.times += joint_times;
+    return by_silhouette;
+  }
+  recent_correction_px_ = joint_recent_correction_px;
+  histograms_ = joint_histograms;
+  r.summary.times += by_silhouette.summary.times;
+  return r;
+}
+
 TrackResult Tracker::Track(const std::vector<cv::Mat>& images_per_camera) {
   Frame frame;
   frame.images = images_per_camera;
@@ -663,23 +712,8 @@ TrackResult Tracker::Track(const Frame& input_frame) {
       status_ == TrackStatus::kLost ? last_good_ : predictor_->Predict(options_.frame_interval_s);
   const double predict_ms = timer.ElapsedMilliseconds();
 
-  TrackResult r = AlignPredicted(frame, predicted);
-  const RegionModalityOptions& ro = options_.region;
-  if (learn_from_start_ && use_photometric_ && ro.enabled &&
-      PhotometricFit(r.summary) < options_.photometric.min_start_fit &&
-      r.summary.start_region_counts.EdgeShare() >= ro.min_start_edge_share) {
-    // At the pose it was given, the image has an edge along most of the silhouette (the
-    // object is there) but the model's appearance does not fit it (wrong
-    // colours, highlights the model lacks): the optical flow would drag the pose away. The
-    // silhouette tracks it instead.
-    UNSEEN_LOG_INFO("tracker: the model's appearance does not fit the first frame (fit {:.2f} "
-                    "< {:.2f}); tracking by its silhouette",
-                    PhotometricFit(r.summary), options_.photometric.min_start_fit);
-    use_photometric_ = false;
-    const StageTimes first = r.summary.times;
-    r = AlignPredicted(frame, predicted);
-    r.summary.times += first;
-  }
+  TrackResult r = learn_from_start_ ? AlignFirstFrame(frame, predicted)
+                                    : AlignPredicted(frame, predicted);
   learn_from_start_ = false;
   if (status_ == TrackStatus::kLost && f.search_when_lost && r.confidence < f.recover_confidence) {
     // Re-acquisition (3.9): correlation seeds, translations and rotations around the last

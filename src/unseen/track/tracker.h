@@ -150,6 +150,10 @@ class Tracker {
   // The alignment of a frame from the predicted pose, with the pyramid depth the recent
   // corrections call for (PyramidOptions::adaptive_levels).
   TrackResult AlignPredicted(const Frame& frame, const Rigid3d& predicted);
+  // The first frame after Initialize(): AlignPredicted from the given pose, with the checks
+  // that the model's appearance fits the image (PhotometricOptions::min_start_fit,
+  // start_drag_px); a model that fails them is tracked without the photometric modality.
+  TrackResult AlignFirstFrame(const Frame& frame, const Rigid3d& given);
   double Confidence(const SolveSummary& summary) const;
   // The photometric modality's own judgement of the alignment in [0, 1] (FailureOptions:
   // support, residual, convergence), whatever the other modalities say.

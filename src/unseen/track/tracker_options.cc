@@ -119,6 +119,10 @@ void PhotometricOptions::Check() const {
   UNSEEN_CHECK(weight > 0.0 && std::isfinite(weight), "photometric.weight {} must be > 0", weight);
   UNSEEN_CHECK(min_start_fit >= 0.0 && min_start_fit <= 1.0,
                "photometric.min_start_fit {} must be in [0, 1]", min_start_fit);
+  UNSEEN_CHECK(start_drag_px >= 0.0 && std::isfinite(start_drag_px),
+               "photometric.start_drag_px {} must be >= 0", start_drag_px);
+  UNSEEN_CHECK(start_drag_ratio >= 1.0 && std::isfinite(start_drag_ratio),
+               "photometric.start_drag_ratio {} must be >= 1", start_drag_ratio);
 }
 
 namespace {
@@ -188,6 +192,8 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
        {{"enabled", Field(&ph.enabled)},
         {"require_appearance", Field(&ph.require_appearance)},
         {"min_start_fit", Field(&ph.min_start_fit)},
+        {"start_drag_px", Field(&ph.start_drag_px)},
+        {"start_drag_ratio", Field(&ph.start_drag_ratio)},
         {"weight", Field(&ph.weight)}}},
       {"preprocess",
        {{"use_linf", Field(&pp.use_linf)},

@@ -162,6 +162,13 @@ struct PhotometricOptions {
   // model's colours are taken to disagree with the camera's (or to lack its highlights) and
   // the object is tracked without the photometric modality (with region enabled); 0: never.
   double min_start_fit = 0.1;
+  // The first frame also aligns by the silhouette alone from the given pose: when the joint
+  // alignment moves the object more than start_drag_ratio times as far as that one, and
+  // more than start_drag_px (level-0 pixels), the model's appearance is taken to pull the
+  // pose off (colours shaded unlike the camera's image: a smaller model hides the
+  // mismatch) and the object is tracked without the photometric modality; 0: never.
+  double start_drag_px = 3.0;
+  double start_drag_ratio = 2.0;
   double weight = 1.0;
   void Check() const;
 };
