@@ -67,6 +67,21 @@ class ModalityScene : public ::testing::Test {
   }
   Rig rig_;
   Rigid3d truth_;
+  // Initializes `tracker` at the truth and tracks the flat cube's colour frames: the model
+  // must have dropped the photometric modality and hold the true pose.
+  void ExpectTrackedBySilhouette(Tracker* tracker) const {
+    tracker->Initialize(truth_);
+    Frame colour_only;
+    colour_only.images = frame_.images;
+    TrackResult r = tracker->Track(colour_only);
+    EXPECT_FALSE(tracker->photometric_in_use()) << r.BriefReport();
+    for (int k = 0; k < 3; ++k) r = tracker->Track(colour_only);
+    EXPECT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
+    const PoseDifference e = Difference(r.world_from_obj, truth_);
+    EXPECT_LT(e.translation, 0.004) << r.BriefReport();
+    EXPECT_LT(e.rotation_rad, 1.0 * kDeg) << r.BriefReport();
+  }
+
   Mesh flat_;
   cv::Mat background_;
   Frame frame_;
@@ -123,16 +138,7 @@ TEST_F(ModalityScene, AModelWhoseColoursDisagreeTracksByItsSilhouette) {
   const Mesh textured = MakeLetteredCube(0.096, 64);
   Tracker tracker(rig_, textured);
   EXPECT_TRUE(tracker.photometric_in_use());
-  tracker.Initialize(truth_);
-  Frame colour_only;
-  colour_only.images = frame_.images;
-  TrackResult r = tracker.Track(colour_only);
-  EXPECT_FALSE(tracker.photometric_in_use()) << r.BriefReport();
-  for (int k = 0; k < 3; ++k) r = tracker.Track(colour_only);
-  EXPECT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
-  const PoseDifference e = Difference(r.world_from_obj, truth_);
-  EXPECT_LT(e.translation, 0.004) << r.BriefReport();
-  EXPECT_LT(e.rotation_rad, 1.0 * kDeg) << r.BriefReport();
+  ExpectTrackedBySilhouette(&tracker);
   // The textured model on its own images keeps the photometric modality.
   Tracker matching(rig_, textured);
   matching.Initialize(truth_);
@@ -147,19 +153,13 @@ TEST_F(ModalityScene, AnAppearanceThatDragsTheFirstPoseIsDropped) {
   TrackerOptions options;
   options.photometric.min_start_fit = 0.0;
   Tracker tracker(rig_, textured, options);
-  tracker.Initialize(truth_);
-  Frame colour_only;
-  colour_only.images = frame_.images;
-  TrackResult r = tracker.Track(colour_only);
-  EXPECT_FALSE(tracker.photometric_in_use()) << r.BriefReport();
-  for (int k = 0; k < 3; ++k) r = tracker.Track(colour_only);
-  const PoseDifference e = Difference(r.world_from_obj, truth_);
-  EXPECT_LT(e.translation, 0.004) << r.BriefReport();
-  EXPECT_LT(e.rotation_rad, 1.0 * kDeg) << r.BriefReport();
+  ExpectTrackedBySilhouette(&tracker);
   // Off, the photometric modality stays (and drags).
   options.photometric.start_drag_px = 0.0;
   Tracker unchecked(rig_, textured, options);
   unchecked.Initialize(truth_);
+  Frame colour_only;
+  colour_only.images = frame_.images;
   unchecked.Track(colour_only);
   EXPECT_TRUE(unchecked.photometric_in_use());
 }
