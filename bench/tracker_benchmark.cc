@@ -13,6 +13,7 @@
 //                     [--groups dev,synthetic,...] [--max-frames N]
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -35,6 +36,7 @@
 #include "unseen/synth/synthesizer.h"
 #include "unseen/track/tracker.h"
 #include "unseen/util/error.h"
+#include "unseen/util/files.h"
 #include "unseen/util/logging.h"
 #include "unseen/util/timer.h"
 
@@ -48,7 +50,11 @@ struct BenchArgs {
   std::string scenes_dir = std::string(UNSEEN_SOURCE_DIR) + "/scenes";
   std::string work_dir = "bench_sequences";
   std::string json_path = "tracker_benchmark.json";
-  std::string groups = "dev,modalities,synthetic,color,scale,speed,occlusion,linf,model_size";
+  // Folders of sequences kept out of the repository (renders of other objects, lights,
+  // cameras; other recordings), comma-separated; default $UNSEEN_HELDOUT_SEQUENCES.
+  std::string heldout_dirs;
+  std::string groups =
+      "dev,heldout,modalities,synthetic,color,scale,speed,occlusion,linf,model_size";
   int max_frames = 0;  // 0 = all
 };
 
@@ -228,6 +234,26 @@ std::vector<Run> PlanRuns(const BenchArgs& args, const std::vector<std::string>&
       }
     }
   }
+  if (wanted("heldout")) {
+    // Sequences the tracker was not tuned on: defaults, one thread, from the true first pose.
+    std::string list = args.heldout_dirs;
+    if (list.empty() && std::getenv("UNSEEN_HELDOUT_SEQUENCES")) {
+      list = std::getenv("UNSEEN_HELDOUT_SEQUENCES");
+    }
+    for (size_t start = 0; start < list.size();) {
+      const size_t end = std::min(list.find(',', start), list.size());
+      const fs::path folder = list.substr(start, end - start);
+      start = end + 1;
+      if (folder.empty()) continue;
+      if (!IsFolder(folder)) {
+        UNSEEN_LOG_WARN("held-out folder {} not found: skipped", folder.string());
+        continue;
+      }
+      for (const fs::path& dir : DevSequences(folder.string())) {
+        add({"heldout", dir.filename().string(), dir.string(), defaults, {}, 1, ""});
+      }
+    }
+  }
   if (wanted("modalities") && have_dev) {
     // One modality at a time against all of them (the defaults), on every development
     // sequence; depth only where the frames carry it.
@@ -346,8 +372,11 @@ int Main(int argc, char** argv) {
   app.add_option("--scenes", args.scenes_dir, "Scene files (scenes/*.yaml)");
   app.add_option("--work", args.work_dir, "Where synthetic sequences are rendered and cached");
   app.add_option("--json", args.json_path, "Results JSON to write");
+  app.add_option("--heldout", args.heldout_dirs,
+                 "Comma-separated folders of held-out sequences (default: "
+                 "$UNSEEN_HELDOUT_SEQUENCES); the heldout group runs each sequence in them");
   app.add_option("--groups", args.groups,
-                 "Comma-separated: dev,modalities,synthetic,color,scale,speed,occlusion,linf,"
+                 "Comma-separated: dev,heldout,modalities,synthetic,color,scale,speed,occlusion,linf,"
                  "model_size");
   app.add_option("--max-frames", args.max_frames, "Track at most N frames per run (0 = all)");
   CLI11_PARSE(app, argc, argv);
