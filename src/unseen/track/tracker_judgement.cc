@@ -1,0 +1,108 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// How the tracker judges an alignment: the photometric fit, the confidence every modality
+// vouches for, and the first frame's checks that the model's appearance fits the image.
+#include "unseen/track/tracker.h"
+
+#include <algorithm>
+#include <vector>
+
+#include "unseen/util/logging.h"
+
+namespace unseen {
+namespace {
+
+double Ramp(double value, double zero_at, double one_at) {
+  const double t = (value - zero_at) / (one_at - zero_at);
+  return std::clamp(t, 0.0, 1.0);
+}
+
+}  // namespace
+
+double Tracker::PhotometricFit(const SolveSummary& s) const {
+  const FailureOptions& f = options_.failure;
+  if (s.counts.used < f.min_pixels) return 0.0;
+  const double support_term = std::max(Ramp(s.share, f.min_share, f.good_share),
+                                       Ramp(double(s.counts.used), f.min_used_px, f.good_used_px));
+  double residual_term = Ramp(s.initial_residual_px, f.bad_residual_px, f.good_residual_px);
+  if (residual_reference_px_ > 0.0) {
+    const double reference = std::max(residual_reference_px_, f.min_reference_residual_px);
+    residual_term *= Ramp(s.initial_residual_px / reference, f.bad_residual_ratio,
+                          f.good_residual_ratio);
+  }
+  const double update_term = Ramp(s.last_update_px, f.bad_update_px, f.good_update_px);
+  return support_term * residual_term * update_term;
+}
+
+double Tracker::Confidence(const SolveSummary& s) const {
+  const FailureOptions& f = options_.failure;
+  if (s.equations < f.min_pixels) return 0.0;
+  const double photometric = use_photometric_ ? PhotometricFit(s) : 0.0;
+  // The silhouette judges the frame of a model without appearance; with measured depth to
+  // guard it, it also vouches for a frame whose texture says little (motion blur). Measured
+  // depth, when there is some, must agree in every case.
+  double region_term = 0.0;
+  const double region_agreement = s.region_counts.Agreement();
+  if (region_agreement >= 0.0 && s.region_counts.used >= f.min_region_lines) {
+    region_term =
+        Ramp(region_agreement, options_.region.bad_agreement, options_.region.good_agreement);
+  }
+  const double depth_agreement = s.depth_counts.Agreement(options_.depth);
+  if (depth_agreement < 0.0) return use_photometric_ ? photometric : region_term;
+  const double depth_term =
+      Ramp(depth_agreement, options_.depth.bad_agreement, options_.depth.good_agreement);
+  // Depth alone (no image modality in use) judges by itself.
+  const bool image_judges = use_photometric_ || options_.region.enabled;
+  return depth_term * (image_judges ? std::max(photometric, region_term) : 1.0);
+}
+
+TrackResult Tracker::AlignFirstFrame(const Frame& frame, const Rigid3d& given) {
+  TrackResult r = AlignPredicted(frame, given);
+  const RegionModalityOptions& ro = options_.region;
+  const PhotometricOptions& po = options_.photometric;
+  if (!use_photometric_ || !ro.enabled) return r;
+  const StageTimes joint_times = r.summary.times;
+  if (PhotometricFit(r.summary) < po.min_start_fit &&
+      r.summary.start_region_counts.EdgeShare() >= ro.min_start_edge_share) {
+    // At the pose it was given, the image has an edge along most of the silhouette (the
+    // object is there) but the model's appearance does not fit it (wrong colours,
+    // highlights the model lacks): the optical flow would drag the pose away. The
+    // silhouette tracks it instead.
+    UNSEEN_LOG_INFO("tracker: the model's appearance does not fit the first frame (fit {:.2f} "
+                    "< {:.2f}); tracking by its silhouette",
+                    PhotometricFit(r.summary), po.min_start_fit);
+    use_photometric_ = false;
+    r = AlignPredicted(frame, given);
+    r.summary.times += joint_times;
+    return r;
+  }
+  if (po.start_drag_px <= 0.0) return r;
+  // The given pose is taken to be close. Where the model's colours are shaded unlike the
+  // image (another renderer, a real camera), the composed virtual image fits best with a
+  // smaller model (the input shows wherever the model does not), so the photometric term
+  // drags the object away, typically deeper; the silhouette alone does not.
+  // What the joint alignment left for the next frames (its correction, the colour samples
+  // it learnt) is kept unless the silhouette's result replaces it.
+  const double joint_recent_correction_px = recent_correction_px_;
+  const std::vector<ColorHistograms> joint_histograms = histograms_;
+  use_photometric_ = false;
+  TrackResult by_silhouette = AlignPredicted(frame, given);
+  use_photometric_ = true;
+  const double joint_px = r.summary.correction_px;
+  const double silhouette_px = by_silhouette.summary.correction_px;
+  if (joint_px > po.start_drag_px && joint_px > po.start_drag_ratio * silhouette_px &&
+      by_silhouette.confidence > 0.0) {
+    UNSEEN_LOG_INFO("tracker: the model's appearance drags the first frame's pose {:.1f} px "
+                    "(the silhouette alone {:.1f} px); tracking by its silhouette",
+                    joint_px, silhouette_px);
+    use_photometric_ = false;
+    by_silhouette.summary.times += joint_times;
+    return by_silhouette;
+  }
+  recent_correction_px_ = joint_recent_correction_px;
+  histograms_ = joint_histograms;
+  r.summary.times += by_silhouette.summary.times;
+  return r;
+}
+
+}  // namespace unseen
