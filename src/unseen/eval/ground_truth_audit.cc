@@ -2,6 +2,7 @@
 #include "unseen/eval/ground_truth_audit.h"
 
 #include <cmath>
+#include <cstdint>
 
 #include <fmt/format.h>
 

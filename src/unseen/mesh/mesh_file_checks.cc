@@ -117,11 +117,13 @@ void CheckPlyHeader(const std::string& path) {
   ThrowError("{}: PLY header has no end_header line", path);
 }
 
+namespace {
+
 // OBJ: assimp crashes on face corners that refer to normals (or uvs) the file does not
 // have. Every index of the f, l and p lines is checked: positive ones against the file's
 // counts of v, vt and vn, negative (relative) ones against those read so far.
-void CheckObjIndices(const std::string& path) {
-  const std::string text = ReadText(path);
+
+void CheckObjIndices(const std::string& path, const std::string& text) {
   const auto for_each_line = [&](const auto& visit) {
     std::istringstream in(text);
     std::string line;
@@ -171,10 +173,10 @@ void CheckObjIndices(const std::string& path) {
 // the first newmtl of a library through a null pointer. It reads the libraries the mtllib
 // lines name and, when one is missing, <stem>.mtl beside the OBJ; each of those that exists
 // may hold only comments and blank lines before its first newmtl.
-void CheckObjMaterials(const std::string& path) {
+void CheckObjMaterials(const std::string& path, const std::string& text) {
   const fs::path obj(path);
   std::vector<fs::path> libraries = {obj.parent_path() / (obj.stem().string() + ".mtl")};
-  std::istringstream in(ReadText(path));
+  std::istringstream in(text);
   std::string line;
   while (std::getline(in, line)) {
     std::istringstream words(line);
@@ -201,6 +203,14 @@ void CheckObjMaterials(const std::string& path) {
                  library.string(), n, statement.substr(0, 80), path);
     }
   }
+}
+
+}  // namespace
+
+void CheckObjFile(const std::string& path) {
+  const std::string text = ReadText(path);
+  CheckObjIndices(path, text);
+  CheckObjMaterials(path, text);
 }
 
 namespace {

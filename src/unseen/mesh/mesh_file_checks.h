@@ -24,12 +24,10 @@ std::string ReadText(const std::string& path);
 // PLY header against the PLY grammar.
 void CheckPlyHeader(const std::string& path);
 
-// OBJ face, line and point indices against the file's vertex, uv and normal counts.
-void CheckObjIndices(const std::string& path);
-
-// The material libraries an OBJ may make assimp read (its mtllib files and <stem>.mtl):
+// OBJ: face, line and point indices against the file's vertex, uv and normal counts; and
+// the material libraries it may make assimp read (its mtllib files and <stem>.mtl), where
 // every statement of a material must follow a newmtl line.
-void CheckObjMaterials(const std::string& path);
+void CheckObjFile(const std::string& path);
 
 // Collada index lists and data-array counts.
 void CheckColladaText(const std::string& path);

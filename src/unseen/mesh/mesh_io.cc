@@ -682,10 +682,7 @@ Mesh LoadMesh(const std::string& path, double scale_to_metres) {
     CheckPlyHeader(path);
     ply_face_texcoords = ReadPlyBody(path);
   }
-  if (extension == ".obj") {
-    CheckObjIndices(path);
-    CheckObjMaterials(path);
-  }
+  if (extension == ".obj") CheckObjFile(path);
   if (extension == ".dae" || extension == ".xml") CheckColladaText(path);
   if (extension == ".gltf" || extension == ".glb") CheckGltfText(path, extension == ".glb");
 
