@@ -211,9 +211,9 @@ TEST_F(Reacquire, AJumpBeyondThePyramidsReachIsReacquired) {
 }
 
 TEST_F(Reacquire, AJumpWithARotationIsReacquiredByTheRotationCandidates) {
-  // The jump and a turn of 25 degrees about the optical axis, or 30 about the horizontal.
+  // The jump and a turn of 40 degrees about the optical axis, or 30 about the horizontal.
   for (const Eigen::Vector3d& turn :
-       {Eigen::Vector3d(0.0, 0.0, 25.0 * kDeg), Eigen::Vector3d(30.0 * kDeg, 0.0, 0.0)}) {
+       {Eigen::Vector3d(0.0, 0.0, 40.0 * kDeg), Eigen::Vector3d(30.0 * kDeg, 0.0, 0.0)}) {
     const std::vector<Rigid3d> poses =
         JumpSequence(CubePose(), Eigen::Vector3d(0.13, 0.03, 0.0), turn, centre_, 4, 8);
     Tracker with(rig_, cube_);

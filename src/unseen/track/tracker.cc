@@ -342,8 +342,11 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
   SolveSummary& s = result.summary;
   s.num_levels = num_levels > 0 ? num_levels : NumLevelsFor(start);
   s.iterations_per_level.assign(s.num_levels, 0);
-  const int margin =
-      static_cast<int>(std::ceil(3.0 * options_.preprocess.blur_sigma_px)) + po.rim_px + 2;
+  // Input around the object: what the filters need beyond the rim and, with the region
+  // modality, a whole correspondence line outside the contour (a line that leaves the
+  // region gives no row, and the contour's extremes are the lines that place the object).
+  int margin = static_cast<int>(std::ceil(3.0 * options_.preprocess.blur_sigma_px)) + po.rim_px + 2;
+  if (options_.region.enabled) margin = std::max(margin, options_.region.line_px + 2);
   const bool input_gradients = options_.selection.use_occlusion_rejection;
   // Reused from frame to frame, so that the equations keep their capacity.
   photometric_.name = "photometric";

@@ -43,7 +43,12 @@ struct PyramidOptions {
   int coarse_max_iterations = 6;
   double coarse_min_update_px = 0.3;
   double max_step_px = 4.0;       // one update moves the object at most this far, level px
-  int rim_px = 3;                 // blurred rim around the rendered mask that is used, px
+  // Blurred rim around the rendered mask whose pixels give photometric rows, px. None by
+  // default: a rim's rows compare the composed virtual image, whose outside is the input,
+  // and pull towards a smaller model wherever the model's shading differs from the image;
+  // the contour is the region modality's. (Measured on the development and held-out
+  // sequences: 0 is as accurate or better than 3 everywhere, photometric alone included.)
+  int rim_px = 0;
   // Levels finer than this are rendered 2x2 supersampled, so that the virtual image has the
   // area-averaged silhouette and texture of a camera image (a point-sampled silhouette pasted
   // over the input biases the pose outwards by about a quarter pixel).

@@ -87,7 +87,8 @@ TEST_F(TrackerScene, StartingAtTheTruthStaysThere) {
   for (int levels : {1, 2, 3}) {
     const TrackResult r = tracker.Align({image_}, truth_, levels);
     const PoseDifference e = Difference(r.world_from_obj, truth_);
-    EXPECT_LT(e.translation, 1e-4) << levels << " levels: " << r.BriefReport();
+    // 0.2 mm at 1 m is 0.03 px of scale on the ~140 px cube.
+    EXPECT_LT(e.translation, 2e-4) << levels << " levels: " << r.BriefReport();
     EXPECT_LT(e.rotation_rad, 0.05 * kDeg) << levels << " levels: " << r.BriefReport();
     EXPECT_GT(r.confidence, 0.9);
     EXPECT_EQ(r.summary.num_levels, levels);
