@@ -71,6 +71,14 @@ void Mesh::Check(const std::string& what) const {
     UNSEEN_CHECK(!projectors[p].image.empty() && projectors[p].image.type() == CV_32FC3,
                  "{}: projector {} has no CV_32FC3 image", what, p);
     projectors[p].camera.Check(what + " projector " + std::to_string(p));
+    const cv::Mat& depth = projectors[p].depth;
+    UNSEEN_CHECK(depth.empty() || (depth.type() == CV_32FC1 &&
+                                   depth.size() == projectors[p].image.size()),
+                 "{}: projector {} depth must be empty or CV_32FC1 of its image's size", what, p);
+    UNSEEN_CHECK(projectors[p].depth_tolerance_m >= 0.0f &&
+                     std::isfinite(projectors[p].depth_tolerance_m),
+                 "{}: projector {} depth_tolerance_m {} must be >= 0", what, p,
+                 projectors[p].depth_tolerance_m);
   }
 }
 

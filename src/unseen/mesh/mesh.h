@@ -31,6 +31,12 @@ struct Projector {
   cv::Mat image;          // CV_32FC3 BGR [0, 1]
   PinholeCamera camera;   // intrinsics of `image`
   Rigid3d cam_from_obj;   // where the projector was, in the object frame
+  // Optional: CV_32FC1 of the size of `image`, the projector's z (metres) of the surface it
+  // saw, 0 where it saw none. With it, a point more than depth_tolerance_m behind that
+  // surface, or where it saw none, is hidden from the projector (self-occlusion); without
+  // it, every point in front of the projector and facing it takes its colour.
+  cv::Mat depth;
+  float depth_tolerance_m = 0.003f;
 };
 
 struct Mesh {

@@ -437,6 +437,11 @@ void CheckMeshForRender(const Mesh& mesh) {
     UNSEEN_CHECK(mesh.projectors[p].cam_from_obj.IsValid(),
                  "Render: mesh projector {} cam_from_obj is not a valid pose ({})", p,
                  mesh.projectors[p].cam_from_obj.ToString());
+    const cv::Mat& depth = mesh.projectors[p].depth;
+    UNSEEN_CHECK(depth.empty() || (depth.type() == CV_32FC1 &&
+                                   depth.size() == mesh.projectors[p].image.size()),
+                 "Render: mesh projector {} depth must be empty or CV_32FC1 of its image's size",
+                 p);
   }
 }
 
@@ -524,6 +529,8 @@ struct ProjectorView {
   float fx, fy, cx, cy;
   float max_x, max_y;  // width - 0.5, height - 0.5
   TextureView image;
+  const cv::Mat* depth = nullptr;  // the projector's surface z, or null
+  float depth_tolerance_m = 0.0f;
 };
 
 // Colour and normal of surface points given by their barycentric coordinates (b1, b2) in
@@ -545,6 +552,8 @@ class Shader {
       v.max_x = p.image.cols - 0.5f;
       v.max_y = p.image.rows - 0.5f;
       v.image = TextureView(p.image);
+      if (!p.depth.empty()) v.depth = &p.depth;
+      v.depth_tolerance_m = p.depth_tolerance_m;
       projectors_.push_back(v);
     }
   }
@@ -632,6 +641,13 @@ class Shader {
       if (!(q.z() > 0.0f)) continue;
       const float x = v.fx * q.x() / q.z() + v.cx, y = v.fy * q.y() / q.z() + v.cy;
       if (!(x >= -0.5f && y >= -0.5f && x < v.max_x && y < v.max_y)) continue;
+      if (v.depth) {
+        // Hidden from the projector: behind the surface it saw there, or it saw none.
+        const int px = std::clamp(static_cast<int>(std::lround(x)), 0, v.depth->cols - 1);
+        const int py = std::clamp(static_cast<int>(std::lround(y)), 0, v.depth->rows - 1);
+        const float seen = v.depth->ptr<float>(py)[px];
+        if (!(seen > 0.0f) || q.z() > seen + v.depth_tolerance_m) continue;
+      }
       // Cosine (times |n|) between the normal and the direction to the projector.
       const float score = -(v.rotation * face_normal_).dot(q) / q.norm();
       if (score > best_score) {

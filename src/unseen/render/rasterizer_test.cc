@@ -676,6 +676,76 @@ TEST(Rasterizer, ProjectiveTextureFromTheRenderingCameraReproducesTheImage) {
   EXPECT_GT(fallback, 500);
 }
 
+TEST(Rasterizer, AProjectorsDepthHidesTheSurfaceBehindWhatItSaw) {
+  // Two parallel quads, the near one covering the left half of the far one as the
+  // projector sees them. Seen from the side, the far quad's hidden part must not take the
+  // near quad's colours from the projector: it falls back to its material.
+  const PinholeCamera cam = TestCamera();
+  const Rigid3d projector_from_obj = Pose(Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, 1.0));
+  Mesh scene = MakeQuad({{-0.3f, -0.3f, 0.2f}, {-0.3f, 0.3f, 0.2f}, {0.3f, 0.3f, 0.2f},
+                         {0.3f, -0.3f, 0.2f}});
+  const Mesh near = MakeQuad({{-0.5f, -0.5f, 0.0f}, {-0.5f, 0.5f, 0.0f}, {-0.05f, 0.5f, 0.0f},
+                              {-0.05f, -0.5f, 0.0f}});
+  const int offset = scene.num_vertices();
+  for (const Eigen::Vector3f& v : near.vertices) scene.vertices.push_back(v);
+  for (const Eigen::Vector3i& t : near.triangles) {
+    scene.triangles.push_back(t + Eigen::Vector3i::Constant(offset));
+  }
+  scene.uvs.clear();
+  Material grey;
+  grey.diffuse_bgr = Eigen::Vector3f::Constant(0.5f);
+  scene.materials = {grey};
+  RenderOptions options;
+  options.cull_back_faces = false;
+  RenderBuffers seen;
+  Render(scene, cam, projector_from_obj, cam.ImageRect(), options, &seen);
+  Projector projector;
+  projector.camera = cam;
+  projector.cam_from_obj = projector_from_obj;
+  projector.image = RandomTexture(cam.width, cam.height, 5);
+  projector.depth = seen.depth.clone();
+  // Only the far quad, seen from the projector's own place: its left half was hidden.
+  Mesh far = MakeQuad({{-0.3f, -0.3f, 0.2f}, {-0.3f, 0.3f, 0.2f}, {0.3f, 0.3f, 0.2f},
+                       {0.3f, -0.3f, 0.2f}});
+  far.uvs.clear();
+  far.materials = {grey};
+  far.projectors = {projector};
+  RenderBuffers out;
+  Render(far, cam, projector_from_obj, cam.ImageRect(), options, &out);
+  int hidden = 0, textured = 0;
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
+      if (!out.mask.at<uint8_t>(v, u)) continue;
+      const cv::Vec3f got = out.color.at<cv::Vec3f>(v, u);
+      const float near_z = seen.depth.at<float>(v, u);
+      const float far_z = out.depth.at<float>(v, u);
+      if (near_z < far_z - 0.05f) {  // the near quad is in front here
+        ASSERT_EQ(got, cv::Vec3f(0.5f, 0.5f, 0.5f)) << u << " " << v;
+        ++hidden;
+      } else if (std::abs(near_z - far_z) < 1e-4f && u > 0 && v > 0 && u + 1 < cam.width &&
+                 v + 1 < cam.height && seen.depth.at<float>(v, u - 1) > 0.15f &&
+                 seen.depth.at<float>(v, u + 1) > 0.15f) {
+        ASSERT_LT(cv::norm(got - projector.image.at<cv::Vec3f>(v, u)), 0.012) << u << " " << v;
+        ++textured;
+      }
+    }
+  }
+  EXPECT_GT(hidden, 300);
+  EXPECT_GT(textured, 300);
+  // Without its depth, the projector paints the hidden half too.
+  far.projectors[0].depth = cv::Mat();
+  Render(far, cam, projector_from_obj, cam.ImageRect(), options, &out);
+  int painted = 0;
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
+      if (out.mask.at<uint8_t>(v, u) && out.color.at<cv::Vec3f>(v, u) != cv::Vec3f(0.5f, 0.5f, 0.5f)) {
+        ++painted;
+      }
+    }
+  }
+  EXPECT_GT(painted, hidden + textured);
+}
+
 TEST(Rasterizer, NormalsAreInTheCameraFrame) {
   const PinholeCamera cam = TestCamera();
   const Rigid3d pose = Pose(Eigen::Vector3d(0.0, 0.4, 0.0), Eigen::Vector3d(0, 0, 1.0));

@@ -102,6 +102,8 @@ void ResidualModel::Check(const std::string& what) const {
                min_scale);
   UNSEEN_CHECK(min_noise > 0.0 && std::isfinite(min_noise), "{}.min_noise {} must be > 0", what,
                min_noise);
+  UNSEEN_CHECK(max_noise >= min_noise && !std::isnan(max_noise),
+               "{}.max_noise {} must be >= min_noise {}", what, max_noise, min_noise);
   UNSEEN_CHECK(weight > 0.0 && std::isfinite(weight), "{}.weight {} must be > 0", what, weight);
 }
 
@@ -165,7 +167,8 @@ FlowSolution SolveJoint(const std::vector<const ModalityEquations*>& modalities,
       }
     }
     mw.stats.initial_rms = std::sqrt(sum_sq / mw.stats.equations);
-    mw.noise = std::max(RobustSigma(&mw.abs_row), mw.eq->model.min_noise);
+    mw.noise = std::clamp(RobustSigma(&mw.abs_row), mw.eq->model.min_noise,
+                          std::max(mw.eq->model.min_noise, mw.eq->model.max_noise));
     mw.weights.resize(mw.eq->cameras.size());
   }
   auto finish_stats = [&] {
@@ -249,7 +252,8 @@ FlowSolution SolveJoint(const std::vector<const ModalityEquations*>& modalities,
       const ResidualModel& model = mw.eq->model;
       const double scale = std::max(RobustSigma(&mw.abs_normalized), model.min_scale);
       mw.stats.robust_scale = scale;
-      mw.noise = std::max(RobustSigma(&mw.abs_row), model.min_noise);
+      mw.noise = std::clamp(RobustSigma(&mw.abs_row), model.min_noise,
+                            std::max(model.min_noise, model.max_noise));
       const double width = model.kernel_width * scale;
       for (auto& w : mw.weights) {
         for (float& v : w) v = static_cast<float>(Weight(model.kernel, v, width));

@@ -5,6 +5,7 @@
 // iteratively re-weighted least squares on top (SPEC 3.9, robust estimation).
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -64,6 +65,10 @@ struct ResidualModel {
   double min_scale = 0.05;      // floor of the robust scale, normalized units
   double min_noise = 1e-4;      // floor of the noise, row units
   double weight = 1.0;          // multiplies 1 / noise^2
+  // Ceiling of the noise, row units: where a row's noise is known, a measure from the
+  // residuals would take a modality's disagreement with the others for noise and silence
+  // it exactly when it disagrees.
+  double max_noise = std::numeric_limits<double>::infinity();
   void Check(const std::string& what) const;
 };
 

@@ -146,15 +146,55 @@ void Tracker::SetModel(Mesh model) {
     box_corners_[k] = Eigen::Vector3d(k & 1 ? hi.x() : lo.x(), k & 2 ? hi.y() : lo.y(),
                                       k & 4 ? hi.z() : lo.z());
   }
-  const PhotometricOptions& po = options_.photometric;
-  use_photometric_ = po.enabled && (!po.require_appearance || model.HasAppearance() ||
-                                    !options_.region.enabled);
-  model_ = std::make_shared<const Mesh>(std::move(model));
+  given_model_ = std::make_shared<const Mesh>(std::move(model));
+  StartWithGivenModel();
   reacquisition_.reset();
   // What was learnt about the old model's fit (its residual floor, the search's caches) does
   // not hold for the new one. The colour statistics are the object's and its
   // surroundings', not the model's: they stay.
   residual_reference_px_ = 0.0;
+}
+
+void Tracker::StartWithGivenModel() {
+  const PhotometricOptions& po = options_.photometric;
+  const bool has_appearance = given_model_->HasAppearance();
+  use_photometric_ = po.enabled && (!po.require_appearance || has_appearance ||
+                                    !options_.region.enabled);
+  // A model without colours takes them from the frames the silhouette tracks.
+  live_appearance_ = po.enabled && options_.live_appearance.enabled && options_.region.enabled &&
+                     !has_appearance;
+  frames_since_capture_ = 0;
+  model_ = given_model_;
+}
+
+void Tracker::UpdateLiveAppearance(const Frame& frame, const TrackResult& r) {
+  const LiveAppearanceOptions& lo = options_.live_appearance;
+  if (!live_appearance_ || r.status != TrackStatus::kTracking || r.confidence < lo.min_confidence) {
+    return;
+  }
+  if (model_ != given_model_ && ++frames_since_capture_ < lo.refresh_frames) return;
+  Mesh live = *given_model_;
+  live.projectors.clear();
+  const float tolerance_m = static_cast<float>(lo.occlusion_tolerance * sphere_radius_);
+  for (int c = 0; c < rig_.size(); ++c) {
+    if (frame.images[c].empty()) continue;
+    const PinholeCamera& camera = rig_.cameras[c].intrinsics;
+    const Rigid3d cam_from_obj = cam_from_world_[c] * r.world_from_obj;
+    const std::optional<PixelRect> rect = ObjectRect(camera, cam_from_obj);
+    if (!rect) continue;
+    std::optional<Projector> p = CaptureProjector(*given_model_, camera, cam_from_obj,
+                                                  frame.images[c], rect->Grow(lo.margin_px),
+                                                  tolerance_m);
+    if (p) live.projectors.push_back(std::move(*p));
+  }
+  if (live.projectors.empty()) return;
+  if (model_ == given_model_) {
+    UNSEEN_LOG_DEBUG("tracker: the model takes its colours from the tracked frames");
+    residual_reference_px_ = 0.0;  // the fit to the given colours says nothing of these
+  }
+  model_ = std::make_shared<const Mesh>(std::move(live));
+  use_photometric_ = true;
+  frames_since_capture_ = 0;
 }
 
 Reacquisition& Tracker::Reacquirer() {
@@ -186,6 +226,7 @@ void Tracker::Initialize(const Rigid3d& world_from_obj) {
   recent_correction_px_ = std::numeric_limits<double>::infinity();
   residual_reference_px_ = 0.0;
   for (ColorHistograms& h : histograms_) h.Reset();
+  StartWithGivenModel();
   learn_from_start_ = true;
   initialized_ = true;
 }
@@ -353,7 +394,8 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
   photometric_.model.kernel = options_.solver.kernel;
   photometric_.model.kernel_width = options_.solver.kernel_width;
   photometric_.model.min_scale = options_.solver.min_scale_px;
-  photometric_.model.weight = options_.photometric.weight;
+  photometric_.model.weight = model_ != given_model_ ? options_.live_appearance.photometric_weight
+                                                    : options_.photometric.weight;
   photometric_.cameras.resize(ncam);
   depth_.name = "depth";
   depth_.model = options_.depth.residual;
@@ -694,6 +736,7 @@ TrackResult Tracker::Track(const Frame& input_frame) {
     r.world_from_obj = last_good_;
     r.confidence = 0.0;
   }
+  UpdateLiveAppearance(frame, r);
   r.summary.times.predict_ms = predict_ms;
   r.summary.times.total_ms = total.ElapsedMilliseconds();
   return r;

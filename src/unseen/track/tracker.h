@@ -179,9 +179,17 @@ class Tracker {
   double UpdatePixels(const Rigid3d& world_from_obj, const Vector6d& twist, int level) const;
   // The re-acquisition search (reacquisition.h), made on first use for the current model.
   Reacquisition& Reacquirer();
+  // The photometric modality's use for the given model, from PhotometricOptions and
+  // LiveAppearanceOptions; the rendered model becomes the given one.
+  void StartWithGivenModel();
+  // After a frame tracked at `world_from_obj`: the model takes its colours from it when it
+  // lives on the tracked frames' (live_appearance_) and the frame is confident enough.
+  void UpdateLiveAppearance(const Frame& frame, const TrackResult& r);
 
   Rig rig_;
   std::vector<Rigid3d> cam_from_world_;
+  std::shared_ptr<const Mesh> given_model_;  // as given to SetModel()
+  // What is rendered: the given model, or it with colours from the tracked frames.
   std::shared_ptr<const Mesh> model_;
   Eigen::Vector3d sphere_centre_ = Eigen::Vector3d::Zero();  // object frame
   double sphere_radius_ = 0.0;
@@ -189,6 +197,10 @@ class Tracker {
   TrackerOptions options_;
   // The photometric modality runs for this model (PhotometricOptions::require_appearance).
   bool use_photometric_ = true;
+  // The model's own colours are not used (none, or the first frame found them misleading):
+  // it takes them from the tracked frames (LiveAppearanceOptions).
+  bool live_appearance_ = false;
+  int frames_since_capture_ = 0;
   std::unique_ptr<MotionPredictor> predictor_;
   std::unique_ptr<ThreadPool> pool_;  // null with one thread
   std::vector<std::unique_ptr<CameraWork>> work_;

@@ -48,7 +48,12 @@ double Tracker::Confidence(const SolveSummary& s) const {
         Ramp(region_agreement, options_.region.bad_agreement, options_.region.good_agreement);
   }
   const double depth_agreement = s.depth_counts.Agreement(options_.depth);
-  if (depth_agreement < 0.0) return use_photometric_ ? photometric : region_term;
+  if (depth_agreement < 0.0) {
+    // Colours taken from the tracked frames vouch for the frame-to-frame fit only; the
+    // silhouette, which judged these models before they had colours, still may.
+    if (live_appearance_) return std::max(photometric, region_term);
+    return use_photometric_ ? photometric : region_term;
+  }
   const double depth_term =
       Ramp(depth_agreement, options_.depth.bad_agreement, options_.depth.good_agreement);
   // Depth alone (no image modality in use) judges by itself.
@@ -72,6 +77,7 @@ TrackResult Tracker::AlignFirstFrame(const Frame& frame, const Rigid3d& given) {
                     "< {:.2f}); tracking by its silhouette",
                     PhotometricFit(r.summary), po.min_start_fit);
     use_photometric_ = false;
+    live_appearance_ = options_.live_appearance.enabled;
     r = AlignPredicted(frame, given);
     r.summary.times += joint_times;
     return r;
@@ -96,6 +102,7 @@ TrackResult Tracker::AlignFirstFrame(const Frame& frame, const Rigid3d& given) {
                     "(the silhouette alone {:.1f} px); tracking by its silhouette",
                     joint_px, silhouette_px);
     use_photometric_ = false;
+    live_appearance_ = options_.live_appearance.enabled;
     by_silhouette.summary.times += joint_times;
     return by_silhouette;
   }

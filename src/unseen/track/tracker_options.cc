@@ -109,6 +109,7 @@ void TrackerOptions::Check() const {
   photometric.Check();
   depth.Check();
   region.Check();
+  live_appearance.Check();
   reacquisition.Check();
   UNSEEN_CHECK(frame_interval_s > 0.0 && std::isfinite(frame_interval_s),
                "frame_interval_s {} must be > 0", frame_interval_s);
@@ -187,6 +188,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
   DepthModalityOptions& de = o->depth;
   RegionModalityOptions& rg = o->region;
   PhotometricOptions& ph = o->photometric;
+  LiveAppearanceOptions& la = o->live_appearance;
   const std::map<std::string, std::map<std::string, Setter>> sections = {
       {"photometric",
        {{"enabled", Field(&ph.enabled)},
@@ -291,6 +293,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"kernel_width", Field(&de.residual.kernel_width)},
         {"min_scale_m", Field(&de.residual.min_scale)},
         {"min_noise_m", Field(&de.residual.min_noise)},
+        {"max_noise_m", Field(&de.residual.max_noise)},
         {"weight", Field(&de.residual.weight)},
         {"agree_distance_m", Field(&de.agree_distance_m)},
         {"bad_agreement", Field(&de.bad_agreement)},
@@ -311,10 +314,18 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"kernel_width", Field(&rg.residual.kernel_width)},
         {"min_scale", Field(&rg.residual.min_scale)},
         {"min_noise", Field(&rg.residual.min_noise)},
+        {"max_noise", Field(&rg.residual.max_noise)},
         {"weight", Field(&rg.residual.weight)},
         {"bad_agreement", Field(&rg.bad_agreement)},
         {"good_agreement", Field(&rg.good_agreement)},
         {"min_start_edge_share", Field(&rg.min_start_edge_share)}}},
+      {"live_appearance",
+       {{"enabled", Field(&la.enabled)},
+        {"min_confidence", Field(&la.min_confidence)},
+        {"refresh_frames", Field(&la.refresh_frames)},
+        {"margin_px", Field(&la.margin_px)},
+        {"occlusion_tolerance", Field(&la.occlusion_tolerance)},
+        {"photometric_weight", Field(&la.photometric_weight)}}},
   };
   UNSEEN_CHECK(root.IsMap(), "{}: expected a map at the top level", what);
   for (const auto& kv : root) {
@@ -331,7 +342,8 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
     if (it == sections.end()) {
       ThrowError("{}: unknown section '{}' (known: photometric, preprocess, selection, solver, "
                  "pyramid, "
-                 "predictor, failure, reacquisition, depth, region, frame_interval_s, threads)",
+                 "predictor, failure, reacquisition, depth, region, live_appearance, "
+                 "frame_interval_s, threads)",
                  what, key);
     }
     ApplySection(kv.second, what + ": " + key, it->second);

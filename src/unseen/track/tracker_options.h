@@ -13,6 +13,7 @@
 //   failure:    {lost_confidence: 0.25, lost_after_frames: 2, recover_confidence: 0.5,
 //                good_used_px: 2500, bad_residual_ratio: 1.75, ...}
 //   reacquisition: {search_radii: 4, rotation_deg: 25, max_candidates: 12, ...}
+//   depth: {...}  region: {...}  live_appearance: {enabled: true, refresh_frames: 1, ...}
 //   frame_interval_s: 0.0333
 //   threads: 1
 #pragma once
@@ -21,6 +22,7 @@
 
 #include "unseen/track/depth_modality.h"
 #include "unseen/track/flow_solver.h"
+#include "unseen/track/live_appearance.h"
 #include "unseen/track/motion_predictor.h"
 #include "unseen/track/pixel_selection.h"
 #include "unseen/track/preprocess.h"
@@ -189,6 +191,8 @@ struct TrackerOptions {
   ReacquisitionOptions reacquisition;
   DepthModalityOptions depth;    // used when frames carry depth
   RegionModalityOptions region;  // the silhouette against learnt colour statistics
+  // Colours from the tracked frames for a model without usable ones of its own.
+  LiveAppearanceOptions live_appearance;
   double frame_interval_s = 1.0 / 30.0;  // time between frames for the predictor, s
   // Threads for one frame (a ThreadPool): cameras are rendered, pre-processed and
   // selected in parallel; with one camera the input's pre-processing runs beside the first

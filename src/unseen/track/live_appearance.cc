@@ -1,0 +1,52 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/track/live_appearance.h"
+
+#include <cmath>
+
+#include "unseen/render/rasterizer.h"
+#include "unseen/util/error.h"
+
+namespace unseen {
+
+void LiveAppearanceOptions::Check() const {
+  UNSEEN_CHECK(min_confidence >= 0.0 && min_confidence <= 1.0,
+               "live_appearance.min_confidence {} must be in [0, 1]", min_confidence);
+  UNSEEN_CHECK(refresh_frames >= 1, "live_appearance.refresh_frames {} must be >= 1",
+               refresh_frames);
+  UNSEEN_CHECK(margin_px >= 0 && margin_px <= 64, "live_appearance.margin_px {} must be in [0, 64]",
+               margin_px);
+  UNSEEN_CHECK(occlusion_tolerance > 0.0 && std::isfinite(occlusion_tolerance),
+               "live_appearance.occlusion_tolerance {} must be > 0", occlusion_tolerance);
+  UNSEEN_CHECK(photometric_weight > 0.0 && std::isfinite(photometric_weight),
+               "live_appearance.photometric_weight {} must be > 0", photometric_weight);
+}
+
+std::optional<Projector> CaptureProjector(const Mesh& model, const PinholeCamera& camera,
+                                          const Rigid3d& cam_from_obj, const cv::Mat& image,
+                                          const PixelRect& rect, float depth_tolerance_m) {
+  UNSEEN_CHECK(image.type() == CV_32FC3 && image.cols == camera.width &&
+                   image.rows == camera.height,
+               "CaptureProjector: the image must be CV_32FC3 of the camera's {}x{} pixels",
+               camera.width, camera.height);
+  const PixelRect crop = rect.Intersect(camera.ImageRect());
+  if (crop.empty()) return std::nullopt;
+  RenderOptions options;
+  options.write_color = false;
+  RenderBuffers buffers;
+  Render(model, camera, cam_from_obj, crop, options, &buffers);
+  if (buffers.mask.empty() || cv::countNonZero(buffers.mask) == 0) return std::nullopt;
+  Projector p;
+  p.image = image(cv::Rect(crop.x0, crop.y0, crop.width(), crop.height())).clone();
+  p.depth = buffers.depth;
+  p.depth_tolerance_m = depth_tolerance_m;
+  p.camera = camera;
+  p.camera.width = crop.width();
+  p.camera.height = crop.height();
+  p.camera.cx -= crop.x0;
+  p.camera.cy -= crop.y0;
+  p.camera.distortion.clear();  // the frame's distortion was removed at input
+  p.cam_from_obj = cam_from_obj;
+  return p;
+}
+
+}  // namespace unseen

@@ -1,0 +1,142 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// Appearance from the live image: a captured projector reproduces the frame on the model,
+// and a model without colours of its own takes them from the tracked frames, so that the
+// photometric modality runs for it.
+#include "unseen/track/live_appearance.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "unseen/mesh/primitives.h"
+#include "unseen/render/rasterizer.h"
+#include "unseen/track/test_scene.h"
+#include "unseen/track/tracker.h"
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+Rigid3d CubePose(double turn = 0.0) {
+  return Rigid3d(ExpSO3(Eigen::Vector3d(0.45, 0.7 + turn, 0.1)),
+                 Eigen::Vector3d(0.02, -0.01, 1.0));
+}
+
+// The lettered cube without its texture: one flat colour.
+Mesh FlatCube() {
+  Mesh cube = MakeLetteredCube(0.096, 16);
+  cube.uvs.clear();
+  for (Material& m : cube.materials) {
+    m.texture.release();
+    m.diffuse_bgr = Eigen::Vector3f(0.55f, 0.35f, 0.25f);
+  }
+  return cube;
+}
+
+class LiveAppearance : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    rig_ = testing::OneCameraRig();
+    textured_ = MakeLetteredCube(0.096, 64);
+    background_ = testing::Background(rig_.cameras[0].intrinsics, 7);
+  }
+  cv::Mat Image(const Rigid3d& world_from_obj) const {
+    return testing::RenderOverBackground(textured_, rig_.cameras[0], world_from_obj, background_);
+  }
+  Rig rig_;
+  Mesh textured_;
+  cv::Mat background_;
+};
+
+TEST_F(LiveAppearance, ACapturedProjectorReproducesTheFrameOnTheModel) {
+  const PinholeCamera& cam = rig_.cameras[0].intrinsics;
+  const Rigid3d pose = CubePose();
+  const cv::Mat image = Image(pose);
+  const PixelRect rect{150, 40, 370, 220};
+  const std::optional<Projector> p = CaptureProjector(FlatCube(), cam, pose, image, rect, 0.003f);
+  ASSERT_TRUE(p.has_value());
+  EXPECT_EQ(p->image.cols, rect.width());
+  EXPECT_EQ(p->depth.size(), p->image.size());
+  Mesh live = FlatCube();
+  live.projectors = {*p};
+  EXPECT_TRUE(live.HasAppearance());
+  RenderBuffers out;
+  Render(live, cam, pose, cam.ImageRect(), RenderOptions(), &out);
+  // Inside the silhouette (away from its anti-aliased edge), the render is the frame.
+  cv::Mat inner;
+  cv::erode(out.mask, inner, cv::Mat(), cv::Point(-1, -1), 2);
+  int checked = 0;
+  double sum_error = 0.0;
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
+      if (!inner.at<uint8_t>(v, u)) continue;
+      sum_error += cv::norm(out.color.at<cv::Vec3f>(v, u) - image.at<cv::Vec3f>(v, u));
+      ++checked;
+    }
+  }
+  ASSERT_GT(checked, 5000);
+  EXPECT_LT(sum_error / checked, 0.01);
+  // Outside the image or of the object: nothing to capture.
+  EXPECT_FALSE(CaptureProjector(FlatCube(), cam, pose, image, PixelRect{600, 0, 700, 50}, 0.003f)
+                   .has_value());
+  EXPECT_FALSE(CaptureProjector(FlatCube(), cam, pose, image, PixelRect{0, 0, 60, 60}, 0.003f)
+                   .has_value());
+  EXPECT_THROW(CaptureProjector(FlatCube(), cam, pose, cv::Mat(10, 10, CV_32FC3), rect, 0.003f),
+               Error);
+}
+
+TEST_F(LiveAppearance, AModelWithoutColoursTakesThemFromTheTrackedFrames) {
+  TrackerOptions options;
+  options.live_appearance.enabled = true;
+  Tracker tracker(rig_, FlatCube(), options);
+  EXPECT_FALSE(tracker.photometric_in_use()) << "a flat model starts on its silhouette";
+  tracker.Initialize(CubePose());
+  TrackResult r = tracker.Track({Image(CubePose())});
+  EXPECT_EQ(r.summary.counts.used, 0) << r.BriefReport();
+  EXPECT_TRUE(tracker.photometric_in_use()) << "the first confident frame gave it colours";
+  EXPECT_EQ(tracker.model().projectors.size(), 1u);
+  // The cube turns a degree a frame: the photometric modality now runs on the frames'
+  // colours and the pose follows.
+  for (int k = 1; k <= 6; ++k) {
+    const Rigid3d truth = CubePose(k * kDeg);
+    r = tracker.Track({Image(truth)});
+    EXPECT_EQ(r.status, TrackStatus::kTracking) << k << ": " << r.BriefReport();
+    EXPECT_GT(r.summary.counts.used, 1000) << k << ": " << r.BriefReport();
+    const PoseDifference e = Difference(r.world_from_obj, truth);
+    EXPECT_LT(e.translation, 0.003) << k << ": " << r.BriefReport();
+    EXPECT_LT(e.rotation_rad, 0.5 * kDeg) << k << ": " << r.BriefReport();
+  }
+  // A new start forgets the colours: the given model again.
+  tracker.Initialize(CubePose());
+  EXPECT_FALSE(tracker.photometric_in_use());
+  EXPECT_TRUE(tracker.model().projectors.empty());
+  // Off (the default), the flat model stays on its silhouette.
+  Tracker plain(rig_, FlatCube());
+  plain.Initialize(CubePose());
+  plain.Track({Image(CubePose())});
+  r = plain.Track({Image(CubePose(kDeg))});
+  EXPECT_FALSE(plain.photometric_in_use());
+  EXPECT_EQ(r.summary.counts.used, 0);
+}
+
+TEST(LiveAppearanceOptions, CheckRejectsBadValues) {
+  LiveAppearanceOptions o;
+  EXPECT_NO_THROW(o.Check());
+  o.refresh_frames = 0;
+  EXPECT_THROW(o.Check(), Error);
+  o = LiveAppearanceOptions();
+  o.min_confidence = 1.5;
+  EXPECT_THROW(o.Check(), Error);
+  o = LiveAppearanceOptions();
+  o.photometric_weight = 0.0;
+  EXPECT_THROW(o.Check(), Error);
+  o = LiveAppearanceOptions();
+  o.occlusion_tolerance = -1.0;
+  EXPECT_THROW(o.Check(), Error);
+}
+
+}  // namespace
+}  // namespace unseen
