@@ -25,17 +25,6 @@ Rigid3d CubePose(double turn = 0.0) {
                  Eigen::Vector3d(0.02, -0.01, 1.0));
 }
 
-// The lettered cube without its texture: one flat colour.
-Mesh FlatCube() {
-  Mesh cube = MakeLetteredCube(0.096, 16);
-  cube.uvs.clear();
-  for (Material& m : cube.materials) {
-    m.texture.release();
-    m.diffuse_bgr = Eigen::Vector3f(0.55f, 0.35f, 0.25f);
-  }
-  return cube;
-}
-
 class LiveAppearance : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -56,11 +45,11 @@ TEST_F(LiveAppearance, ACapturedProjectorReproducesTheFrameOnTheModel) {
   const Rigid3d pose = CubePose();
   const cv::Mat image = Image(pose);
   const PixelRect rect{150, 40, 370, 220};
-  const std::optional<Projector> p = CaptureProjector(FlatCube(), cam, pose, image, rect, 0.003f);
+  const std::optional<Projector> p = CaptureProjector(testing::FlatCube(), cam, pose, image, rect, 0.003f);
   ASSERT_TRUE(p.has_value());
   EXPECT_EQ(p->image.cols, rect.width());
   EXPECT_EQ(p->depth.size(), p->image.size());
-  Mesh live = FlatCube();
+  Mesh live = testing::FlatCube();
   live.projectors = {*p};
   EXPECT_TRUE(live.HasAppearance());
   RenderBuffers out;
@@ -80,18 +69,18 @@ TEST_F(LiveAppearance, ACapturedProjectorReproducesTheFrameOnTheModel) {
   ASSERT_GT(checked, 5000);
   EXPECT_LT(sum_error / checked, 0.01);
   // Outside the image or of the object: nothing to capture.
-  EXPECT_FALSE(CaptureProjector(FlatCube(), cam, pose, image, PixelRect{600, 0, 700, 50}, 0.003f)
+  EXPECT_FALSE(CaptureProjector(testing::FlatCube(), cam, pose, image, PixelRect{600, 0, 700, 50}, 0.003f)
                    .has_value());
-  EXPECT_FALSE(CaptureProjector(FlatCube(), cam, pose, image, PixelRect{0, 0, 60, 60}, 0.003f)
+  EXPECT_FALSE(CaptureProjector(testing::FlatCube(), cam, pose, image, PixelRect{0, 0, 60, 60}, 0.003f)
                    .has_value());
-  EXPECT_THROW(CaptureProjector(FlatCube(), cam, pose, cv::Mat(10, 10, CV_32FC3), rect, 0.003f),
+  EXPECT_THROW(CaptureProjector(testing::FlatCube(), cam, pose, cv::Mat(10, 10, CV_32FC3), rect, 0.003f),
                Error);
 }
 
 TEST_F(LiveAppearance, AModelWithoutColoursTakesThemFromTheTrackedFrames) {
   TrackerOptions options;
   options.live_appearance.enabled = true;
-  Tracker tracker(rig_, FlatCube(), options);
+  Tracker tracker(rig_, testing::FlatCube(), options);
   EXPECT_FALSE(tracker.photometric_in_use()) << "a flat model starts on its silhouette";
   tracker.Initialize(CubePose());
   TrackResult r = tracker.Track({Image(CubePose())});
@@ -114,7 +103,7 @@ TEST_F(LiveAppearance, AModelWithoutColoursTakesThemFromTheTrackedFrames) {
   EXPECT_FALSE(tracker.photometric_in_use());
   EXPECT_TRUE(tracker.model().projectors.empty());
   // Off (the default), the flat model stays on its silhouette.
-  Tracker plain(rig_, FlatCube());
+  Tracker plain(rig_, testing::FlatCube());
   plain.Initialize(CubePose());
   plain.Track({Image(CubePose())});
   r = plain.Track({Image(CubePose(kDeg))});

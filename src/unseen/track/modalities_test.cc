@@ -28,17 +28,6 @@ Rigid3d Perturb(const Rigid3d& pose, const Vector6d& d) {
   return Rigid3d(ExpSO3(d.tail<3>()) * pose.rotation(), pose.translation() + d.head<3>());
 }
 
-// The lettered cube without its texture: one flat grey-blue colour.
-Mesh FlatCube() {
-  Mesh cube = MakeLetteredCube(0.096, 16);
-  cube.uvs.clear();
-  for (Material& m : cube.materials) {
-    m.texture.release();
-    m.diffuse_bgr = Eigen::Vector3f(0.55f, 0.35f, 0.25f);
-  }
-  return cube;
-}
-
 // Metric depth of `mesh` at `world_from_obj` in front of a wall at `wall_m`, as an RGB-D
 // camera registered to the colour camera measures it.
 cv::Mat DepthImage(const Mesh& mesh, const RigCamera& camera, const Rigid3d& world_from_obj,
@@ -58,7 +47,7 @@ class ModalityScene : public ::testing::Test {
   void SetUp() override {
     rig_ = testing::OneCameraRig();
     truth_ = CubePose();
-    flat_ = FlatCube();
+    flat_ = testing::FlatCube();
     // A uniform pale background: the untextured cube's silhouette is its only cue.
     background_ = cv::Mat(rig_.cameras[0].intrinsics.height, rig_.cameras[0].intrinsics.width,
                           CV_32FC3, cv::Scalar(0.8, 0.85, 0.9));
@@ -89,8 +78,8 @@ class ModalityScene : public ::testing::Test {
 
 TEST(MeshAppearance, TellsTexturedFromFlatModels) {
   EXPECT_TRUE(MakeLetteredCube(0.1, 16).HasAppearance());
-  EXPECT_FALSE(FlatCube().HasAppearance());
-  Mesh coloured = FlatCube();
+  EXPECT_FALSE(testing::FlatCube().HasAppearance());
+  Mesh coloured = testing::FlatCube();
   coloured.colors_bgr.assign(coloured.vertices.size(), Eigen::Vector3f(0.2f, 0.2f, 0.2f));
   EXPECT_FALSE(coloured.HasAppearance());
   coloured.colors_bgr[0] = Eigen::Vector3f(0.9f, 0.2f, 0.2f);
@@ -206,7 +195,7 @@ TEST_F(ModalityScene, DepthDisagreementMakesAPoseFarAwayLost) {
 
 TEST(DepthModality, RowsVanishAtTheTruePose) {
   const Rig rig = testing::OneCameraRig();
-  const Mesh cube = FlatCube();
+  const Mesh cube = testing::FlatCube();
   const Rigid3d cam_from_obj = CubePose();
   const cv::Mat measured = DepthImage(cube, rig.cameras[0], cam_from_obj, 1.6f);
   RenderBuffers rendered;

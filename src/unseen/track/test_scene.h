@@ -9,6 +9,7 @@
 
 #include "unseen/camera/camera.h"
 #include "unseen/mesh/mesh.h"
+#include "unseen/mesh/primitives.h"
 #include "unseen/render/rasterizer.h"
 
 namespace unseen::testing {
@@ -31,6 +32,17 @@ inline cv::Mat Background(const PinholeCamera& cam, int seed) {
   cv::Mat out;
   cv::resize(small, out, cv::Size(cam.width, cam.height), 0, 0, cv::INTER_CUBIC);
   return out;
+}
+
+// The lettered cube (96 mm) without its texture: one flat colour, no appearance.
+inline Mesh FlatCube() {
+  Mesh cube = MakeLetteredCube(0.096, 16);
+  cube.uvs.clear();
+  for (Material& m : cube.materials) {
+    m.texture.release();
+    m.diffuse_bgr = Eigen::Vector3f(0.55f, 0.35f, 0.25f);
+  }
+  return cube;
 }
 
 // `mesh` rendered at `world_from_obj` over `background`, 2x2 supersampled and averaged.
