@@ -102,6 +102,7 @@ void ResidualModel::Check(const std::string& what) const {
                min_scale);
   UNSEEN_CHECK(min_noise > 0.0 && std::isfinite(min_noise), "{}.min_noise {} must be > 0", what,
                min_noise);
+  UNSEEN_CHECK(damping >= 0.0 && damping < 1.0, "{}.damping {} must be in [0, 1)", what, damping);
   UNSEEN_CHECK(max_noise >= min_noise && !std::isnan(max_noise),
                "{}.max_noise {} must be >= min_noise {}", what, max_noise, min_noise);
   UNSEEN_CHECK(weight > 0.0 && std::isfinite(weight), "{}.weight {} must be > 0", what, weight);
@@ -189,9 +190,11 @@ FlowSolution SolveJoint(const std::vector<const ModalityEquations*>& modalities,
   for (int pass = 0; pass < solves; ++pass) {
     Matrix6d h = Matrix6d::Zero();
     Vector6d g = Vector6d::Zero();
+    double modality_damping = 0.0;  // sum over modalities of damping * trace(H_m) / 6
     for (ModalityWork& mw : work) {
       if (mw.stats.equations == 0) continue;
       const double lambda = mw.eq->model.weight / (mw.noise * mw.noise);
+      const double trace_before = h.trace();
       for (size_t c = 0; c < mw.eq->cameras.size(); ++c) {
         const FlowEquations& eq = mw.eq->cameras[c];
         if (eq.size() == 0) continue;
@@ -206,11 +209,12 @@ FlowSolution SolveJoint(const std::vector<const ModalityEquations*>& modalities,
         h.noalias() += lambda * (b.transpose() * hc * b);
         g.noalias() += lambda * (b.transpose() * gc);
       }
+      modality_damping += mw.eq->model.damping * (h.trace() - trace_before) / 6.0;
     }
     const double trace = h.trace();
     if (!(trace > 0.0) || !std::isfinite(trace)) break;
     Matrix6d damped = h;
-    damped.diagonal().array() += options.damping * trace / 6.0;
+    damped.diagonal().array() += options.damping * trace / 6.0 + modality_damping;
     Eigen::LDLT<Matrix6d> ldlt(damped);
     if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) break;
     const Vector6d x = ldlt.solve(g);

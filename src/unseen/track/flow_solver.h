@@ -69,6 +69,10 @@ struct ResidualModel {
   // residuals would take a modality's disagreement with the others for noise and silence
   // it exactly when it disagrees.
   double max_noise = std::numeric_limits<double>::infinity();
+  // Levenberg damping this modality adds to the normal equations, relative to the mean
+  // diagonal of its own share of them (trace / 6): it steadies the directions it leaves
+  // weakly determined without slowing the others' (which add their own, if any).
+  double damping = 0.0;
   void Check(const std::string& what) const;
 };
 

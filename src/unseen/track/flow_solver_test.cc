@@ -155,6 +155,34 @@ TEST(FlowSolver, ModalitiesAreWeighedByTheirNoise) {
   EXPECT_FALSE(SolveJoint({&empty}, options).ok);
 }
 
+TEST(FlowSolver, AModalitysDampingShortensItsOwnStepOnly) {
+  // Exact equations: undamped, the solve finds the twist; a modality's damping shortens
+  // the step while it is alone, and much less next to a modality that determines the
+  // motion far better.
+  std::mt19937 rng(17);
+  Vector6d truth;
+  truth << 0.002, 0.001, -0.003, 0.01, 0.0, -0.02;
+  ModalityEquations damped, strong;
+  damped.cameras = {
+      MakeEquations(Camera(), Rigid3d(), Eigen::Vector3d(0, 0, 1), truth, 400, 0, &rng)};
+  strong.cameras = {
+      MakeEquations(Camera(), Rigid3d(), Eigen::Vector3d(0, 0, 1), truth, 400, 0, &rng)};
+  damped.model.kernel = strong.model.kernel = RobustKernel::kNone;
+  damped.model.min_noise = strong.model.min_noise = 1.0;  // fixed weights: 1 and 100
+  strong.model.weight = 100.0;
+  FlowSolverOptions options;
+  options.damping = 0.0;
+  const Vector6d plain = SolveJoint({&damped}, options).twist;
+  EXPECT_LT((plain - truth).norm(), 1e-4 * truth.norm());
+  damped.model.damping = 0.1;
+  const Vector6d alone = SolveJoint({&damped}, options).twist;
+  EXPECT_LT(alone.norm(), 0.97 * truth.norm());
+  const Vector6d joint = SolveJoint({&damped, &strong}, options).twist;
+  EXPECT_LT((joint - truth).norm(), 0.3 * (alone - truth).norm());
+  damped.model.damping = 1.0;
+  EXPECT_THROW(damped.model.Check("region"), Error);
+}
+
 TEST(FlowSolver, OptionsCheck) {
   FlowSolverOptions o;
   EXPECT_NO_THROW(o.Check());

@@ -95,7 +95,7 @@ TEST_F(LiveAppearance, AModelWithoutColoursTakesThemFromTheTrackedFrames) {
     EXPECT_EQ(r.status, TrackStatus::kTracking) << k << ": " << r.BriefReport();
     EXPECT_GT(r.summary.counts.used, 1000) << k << ": " << r.BriefReport();
     const PoseDifference e = Difference(r.world_from_obj, truth);
-    EXPECT_LT(e.translation, 0.003) << k << ": " << r.BriefReport();
+    EXPECT_LT(e.translation, 0.004) << k << ": " << r.BriefReport();  // 0.3 px of scale
     EXPECT_LT(e.rotation_rad, 0.5 * kDeg) << k << ": " << r.BriefReport();
   }
   // A new start forgets the colours: the given model again.
