@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdlib>
 
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
@@ -451,7 +450,6 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
                                                      po.coarse_max_iterations);
     const double min_update_px = level == 0 ? po.min_update_px : po.coarse_min_update_px;
     SelectionCounts counts;
-    double previous_update_px = std::numeric_limits<double>::infinity();
     for (int iteration = 0; iteration < max_iterations; ++iteration) {
       ++s.renders;
       const Rigid3d round_pose = pose;
@@ -588,8 +586,6 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
         break;
       }
       Vector6d twist = solution.twist;
-      static const double step_scale = std::getenv("UNSEEN_STEP") ? std::atof(std::getenv("UNSEEN_STEP")) : 1.0;
-      if (!use_photometric_) twist *= step_scale;
       double update_px = UpdatePixels(pose, twist, level);
       if (update_px > po.max_step_px) {
         twist *= po.max_step_px / update_px;
@@ -605,10 +601,6 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
       if (level == 0) s.last_update_px = update_px;
       s.times.solve_ms += timer.ElapsedMilliseconds();
       if (update_px < min_update_px) break;
-      static const double stall_px = std::getenv("UNSEEN_STALL_PX") ? std::atof(std::getenv("UNSEEN_STALL_PX")) : 0.0;
-      static const double stall_ratio = std::getenv("UNSEEN_STALL_RATIO") ? std::atof(std::getenv("UNSEEN_STALL_RATIO")) : 0.8;
-      if (level == 0 && iteration > 0 && update_px < stall_px && update_px > stall_ratio * previous_update_px) break;
-      previous_update_px = update_px;
     }
   }
   for (const auto& w : work_) {
