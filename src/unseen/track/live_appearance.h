@@ -27,6 +27,11 @@ struct LiveAppearanceOptions {
   // highlights baked into the texture move over the surface and the pose drifts (held-out
   // duck and the untextured figure fall from 100 % to 35-63 %).
   bool enabled = false;
+  // With enabled: every model takes its colours from the frames, also one whose own
+  // colours fit. For light that changes strongly while the object is tracked (a moving
+  // lamp: held-out small box, 47 -> 100 %); elsewhere the model's own colours anchor the
+  // pose better (occluded box, cluttered cube: a few mm of drift, or loss).
+  bool always = false;
   // Frames tracked at least this confidently give the model its colours.
   double min_confidence = 0.8;
   // A new texture after at most this many frames; between them the last one stays (a

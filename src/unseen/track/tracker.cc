@@ -160,9 +160,11 @@ void Tracker::StartWithGivenModel() {
   const bool has_appearance = given_model_->HasAppearance();
   use_photometric_ = po.enabled && (!po.require_appearance || has_appearance ||
                                     !options_.region.enabled);
-  // A model without colours takes them from the frames the silhouette tracks.
-  live_appearance_ = po.enabled && options_.live_appearance.enabled && options_.region.enabled &&
-                     !has_appearance;
+  // A model without colours takes them from the frames the silhouette tracks (or every
+  // model, LiveAppearanceOptions::always).
+  const LiveAppearanceOptions& lo = options_.live_appearance;
+  live_appearance_ = po.enabled && lo.enabled && options_.region.enabled &&
+                     (!has_appearance || lo.always);
   frames_since_capture_ = 0;
   model_ = given_model_;
 }

@@ -323,6 +323,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"min_start_edge_share", Field(&rg.min_start_edge_share)}}},
       {"live_appearance",
        {{"enabled", Field(&la.enabled)},
+        {"always", Field(&la.always)},
         {"min_confidence", Field(&la.min_confidence)},
         {"refresh_frames", Field(&la.refresh_frames)},
         {"margin_px", Field(&la.margin_px)},
