@@ -130,4 +130,18 @@ void AddDepthEquations(const DepthModalityInput& in, const DepthModalityOptions&
   *counts += c;
 }
 
+void DepthModality::AddEquations(const ModalityRound& round) {
+  if (!round.measured_depth || round.measured_depth->empty()) return;
+  UNSEEN_CHECK(round.virtual_image, "DepthModality: the round has no rendered depth");
+  DepthModalityInput in;
+  in.rendered_depth = &round.virtual_image->depth;
+  in.roi = round.roi;
+  in.level_camera = round.level_camera;
+  in.level = round.level;
+  in.measured_depth = round.measured_depth;
+  in.camera = round.camera_intrinsics;
+  in.origin_in_cam = round.origin_in_cam;
+  AddDepthEquations(in, options_, &CameraEquations(round), &CameraCounts(round));
+}
+
 }  // namespace unseen

@@ -16,6 +16,7 @@
 
 #include "unseen/camera/camera.h"
 #include "unseen/track/flow_solver.h"
+#include "unseen/track/modality.h"
 
 namespace unseen {
 
@@ -77,5 +78,19 @@ struct DepthModalityInput {
 // inv_grad_norm = 1: residuals in metres) and adds to `counts`.
 void AddDepthEquations(const DepthModalityInput& input, const DepthModalityOptions& options,
                        FlowEquations* out, DepthCounts* counts);
+
+// The depth modality behind the Modality interface: rows for the cameras whose round has
+// measured depth.
+class DepthModality : public CountingModality<DepthCounts> {
+ public:
+  explicit DepthModality(const DepthModalityOptions& options = {})
+      : CountingModality("depth"), options_(options) {
+    residual_model() = options.residual;
+  }
+  void AddEquations(const ModalityRound& round) override;
+
+ private:
+  DepthModalityOptions options_;
+};
 
 }  // namespace unseen

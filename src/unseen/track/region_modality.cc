@@ -303,4 +303,49 @@ void AddRegionEquations(const RegionModalityInput& in, const RegionModalityOptio
   *counts += c;
 }
 
+RegionModality::RegionModality(const RegionModalityOptions& options, int num_cameras)
+    : CountingModality("region"), options_(options) {
+  residual_model() = options.residual;
+  UNSEEN_CHECK(num_cameras >= 1, "RegionModality: {} cameras", num_cameras);
+  histograms_.assign(num_cameras, ColorHistograms(options.bins_per_channel));
+}
+
+void RegionModality::AddEquations(const ModalityRound& round) {
+  UNSEEN_CHECK(round.virtual_image && round.input, "RegionModality: the round has no images");
+  UNSEEN_CHECK(round.camera >= 0 && round.camera < static_cast<int>(histograms_.size()),
+               "RegionModality: camera {} of {}", round.camera, histograms_.size());
+  RegionModalityInput in;
+  in.image = round.input;
+  in.mask = &round.virtual_image->mask;
+  in.rendered_depth = &round.virtual_image->depth;
+  in.coverage = &round.virtual_image->coverage;
+  in.roi = round.roi;
+  in.camera = round.level_camera;
+  in.origin_in_cam = round.origin_in_cam;
+  in.level = round.level;
+  ColorHistograms& h = histograms_[round.camera];
+  FlowEquations& out = CameraEquations(round);
+  RegionCounts& counts = CameraCounts(round);
+  const bool first = !h.learnt() && round.first_frame;
+  AddRegionEquations(in, options_, round.learn || first, &h, &out, &counts);
+  if (first) {
+    // Nothing learnt yet: the given pose teaches the statistics at once, then the lines
+    // are judged by them.
+    h.Commit(1.0);
+    if (h.learnt()) AddRegionEquations(in, options_, false, &h, &out, &counts);
+  }
+}
+
+void RegionModality::Commit(double rate) {
+  for (ColorHistograms& h : histograms_) h.Commit(rate);
+}
+
+void RegionModality::DiscardPending() {
+  for (ColorHistograms& h : histograms_) h.DiscardPending();
+}
+
+void RegionModality::Reset() {
+  for (ColorHistograms& h : histograms_) h.Reset();
+}
+
 }  // namespace unseen

@@ -27,6 +27,7 @@
 
 #include "unseen/camera/camera.h"
 #include "unseen/track/flow_solver.h"
+#include "unseen/track/modality.h"
 
 namespace unseen {
 
@@ -128,5 +129,26 @@ struct RegionModalityInput {
 void AddRegionEquations(const RegionModalityInput& input, const RegionModalityOptions& options,
                         bool learn, ColorHistograms* histograms, FlowEquations* out,
                         RegionCounts* counts);
+
+// The region modality behind the Modality interface, with each camera's colour statistics.
+// Rounds that may learn (ModalityRound::learn) count their line pixels as pending samples;
+// Commit() blends them in once the tracker finds the frame confidently tracked. The first
+// frame after Initialize() learns at once from the given pose.
+class RegionModality : public CountingModality<RegionCounts> {
+ public:
+  explicit RegionModality(const RegionModalityOptions& options = {}, int num_cameras = 1);
+  void AddEquations(const ModalityRound& round) override;
+  // Blends every camera's pending samples in with `rate` (RegionModalityOptions::learn_rate).
+  void Commit(double rate);
+  void DiscardPending();
+  void Reset();  // forgets what was learnt
+  // The statistics as they are (to restore after a trial alignment).
+  const std::vector<ColorHistograms>& histograms() const { return histograms_; }
+  void set_histograms(const std::vector<ColorHistograms>& h) { histograms_ = h; }
+
+ private:
+  RegionModalityOptions options_;
+  std::vector<ColorHistograms> histograms_;  // per camera
+};
 
 }  // namespace unseen

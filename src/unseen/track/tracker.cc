@@ -109,8 +109,10 @@ Tracker::Tracker(const Rig& rig, Mesh model, const TrackerOptions& options)
   for (const RigCamera& c : rig_.cameras) {
     cam_from_world_.push_back(c.cam_from_world());
     work_.push_back(std::make_unique<CameraWork>());
-    histograms_.emplace_back(options_.region.bins_per_channel);
   }
+  photometric_ = PhotometricModality(options_.selection);
+  depth_ = DepthModality(options_.depth);
+  region_ = RegionModality(options_.region, rig_.size());
   predictor_ = MakeMotionPredictor(options_.predictor);
   if (options_.threads != 1) pool_ = std::make_unique<ThreadPool>(options_.threads);
   SetModel(std::move(model));
@@ -227,7 +229,7 @@ void Tracker::Initialize(const Rigid3d& world_from_obj) {
   bad_frames_ = 0;
   recent_correction_px_ = std::numeric_limits<double>::infinity();
   residual_reference_px_ = 0.0;
-  for (ColorHistograms& h : histograms_) h.Reset();
+  region_.Reset();
   StartWithGivenModel();
   learn_from_start_ = true;
   initialized_ = true;
@@ -391,26 +393,14 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
   int margin = static_cast<int>(std::ceil(3.0 * options_.preprocess.blur_sigma_px)) + po.rim_px + 2;
   if (options_.region.enabled) margin = std::max(margin, options_.region.line_px + 2);
   const bool input_gradients = options_.selection.use_occlusion_rejection;
-  // Reused from frame to frame, so that the equations keep their capacity.
-  photometric_.name = "photometric";
-  photometric_.model.kernel = options_.solver.kernel;
-  photometric_.model.kernel_width = options_.solver.kernel_width;
-  photometric_.model.min_scale = options_.solver.min_scale_px;
-  photometric_.model.weight = model_ != given_model_ ? options_.live_appearance.photometric_weight
+  ResidualModel& photometric_model = photometric_.residual_model();
+  photometric_model.kernel = options_.solver.kernel;
+  photometric_model.kernel_width = options_.solver.kernel_width;
+  photometric_model.min_scale = options_.solver.min_scale_px;
+  photometric_model.weight = model_ != given_model_ ? options_.live_appearance.photometric_weight
                                                     : options_.photometric.weight;
-  photometric_.cameras.resize(ncam);
-  depth_.name = "depth";
-  depth_.model = options_.depth.residual;
-  depth_.cameras.resize(ncam);
-  region_.name = "region";
-  region_.model = options_.region.residual;
-  region_.cameras.resize(ncam);
-  for (ColorHistograms& h : histograms_) h.DiscardPending();
-  std::vector<RegionCounts> camera_region_counts(ncam);
-  std::vector<FlowEquations>& equations = photometric_.cameras;
+  region_.DiscardPending();
   const bool use_depth = !frame.depths.empty();
-  std::vector<SelectionCounts> camera_counts(ncam);
-  std::vector<DepthCounts> camera_depth_counts(ncam);
   std::vector<int> jobs;  // c: camera c's virtual image; ncam + c: its input
   for (auto& w : work_) {
     w->times = StageTimes();
@@ -451,7 +441,6 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
                                           : std::min(po.max_iterations_per_level,
                                                      po.coarse_max_iterations);
     const double min_update_px = level == 0 ? po.min_update_px : po.coarse_min_update_px;
-    SelectionCounts counts;
     for (int iteration = 0; iteration < max_iterations; ++iteration) {
       ++s.renders;
       const Rigid3d round_pose = pose;
@@ -495,84 +484,49 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
           w.input_preprocess_ms += input_timer.ElapsedMilliseconds();
         }
       });
-      // Pixel selection (4.8)-(4.15), (3.6), per camera.
+      // Each modality's rows, per camera: pixel selection (4.8)-(4.15), (3.6) for the
+      // photometric one.
+      photometric_.BeginRound(ncam);
+      depth_.BeginRound(ncam);
+      region_.BeginRound(ncam);
       RunParallel(ncam, [&](int c) {
         CameraWork& w = *work_[c];
-        equations[c].Clear();
-        depth_.cameras[c].Clear();
-        region_.cameras[c].Clear();
-        camera_region_counts[c] = RegionCounts();
-        camera_counts[c] = SelectionCounts();
-        camera_depth_counts[c] = DepthCounts();
         if (!w.active || !w.virtual_ok) return;
         Timer select_timer;
-        SelectionInput in;
-        in.virtual_image = &w.virtual_pre;
-        in.input_image = &w.input_pre;
-        in.region = &w.region;
-        in.depth = &w.depth_used;
-        in.roi = w.roi;
-        in.camera = w.camera;
-        in.origin_in_cam = (cam_from_world_[c] * round_pose).translation();
-        equations[c].world_from_cam_rotation = rig_.cameras[c].world_from_cam.RotationMatrix();
-        if (use_photometric_) {
-          SelectPixels(in, options_.selection, &equations[c], &camera_counts[c]);
-        }
-        if (use_depth && !frame.depths[c].empty()) {
-          DepthModalityInput din;
-          din.rendered_depth = &w.virtual_image.depth;
-          din.roi = w.roi;
-          din.level_camera = w.camera;
-          din.level = level;
-          din.measured_depth = &frame.depths[c];
-          din.camera = rig_.cameras[c].intrinsics;
-          din.origin_in_cam = in.origin_in_cam;
-          depth_.cameras[c].world_from_cam_rotation = equations[c].world_from_cam_rotation;
-          AddDepthEquations(din, options_.depth, &depth_.cameras[c], &camera_depth_counts[c]);
-        }
-        if (options_.region.enabled) {
-          RegionModalityInput rin;
-          rin.image = &w.input_roi;
-          rin.mask = &w.virtual_image.mask;
-          rin.rendered_depth = &w.virtual_image.depth;
-          rin.coverage = &w.virtual_image.coverage;
-          rin.roi = w.roi;
-          rin.camera = w.camera;
-          rin.origin_in_cam = in.origin_in_cam;
-          rin.level = level;
-          region_.cameras[c].world_from_cam_rotation = equations[c].world_from_cam_rotation;
-          ColorHistograms& h = histograms_[c];
-          // The level-0 rounds teach the statistics (committed by Track() for a confident
-          // frame); the first frame after Initialize() learns at once from the given pose.
-          const bool first = !h.learnt() && learn_from_start_;
-          AddRegionEquations(rin, options_.region, level == 0 || first, &h, &region_.cameras[c],
-                             &camera_region_counts[c]);
-          if (first) {
-            h.Commit(1.0);
-            if (h.learnt()) {
-              AddRegionEquations(rin, options_.region, false, &h, &region_.cameras[c],
-                                 &camera_region_counts[c]);
-            }
-          }
-        }
+        ModalityRound round;
+        round.camera = c;
+        round.level = level;
+        round.roi = w.roi;
+        round.level_camera = w.camera;
+        round.camera_intrinsics = rig_.cameras[c].intrinsics;
+        round.world_from_cam_rotation = rig_.cameras[c].world_from_cam.RotationMatrix();
+        round.origin_in_cam = (cam_from_world_[c] * round_pose).translation();
+        round.virtual_image = &w.virtual_image;
+        round.input = &w.input_roi;
+        round.virtual_pre = &w.virtual_pre;
+        round.input_pre = &w.input_pre;
+        round.photometric_region = &w.region;
+        round.photometric_depth = &w.depth_used;
+        if (use_depth && !frame.depths[c].empty()) round.measured_depth = &frame.depths[c];
+        round.learn = level == 0;
+        round.first_frame = learn_from_start_;
+        if (use_photometric_) photometric_.AddEquations(round);
+        depth_.AddEquations(round);  // rows only where the frame has depth
+        if (options_.region.enabled) region_.AddEquations(round);
         w.times.select_ms += select_timer.ElapsedMilliseconds();
       });
-      counts = SelectionCounts();
-      for (const SelectionCounts& b : camera_counts) counts += b;
+      const SelectionCounts counts = photometric_.counts();
+      const RegionCounts region_counts = region_.counts();
 
       timer.Restart();
-      const FlowSolution solution =
-          SolveJoint({&photometric_, &depth_, &region_}, options_.solver);
-      if (coarsest && iteration == 0) {
-        for (const RegionCounts& rc : camera_region_counts) s.start_region_counts += rc;
-      }
+      const FlowSolution solution = SolveJoint(
+          {&photometric_.equations(), &depth_.equations(), &region_.equations()}, options_.solver);
+      if (coarsest && iteration == 0) s.start_region_counts += region_counts;
       if (level == 0) {
-        s.depth_counts = DepthCounts();
-        for (const DepthCounts& d : camera_depth_counts) s.depth_counts += d;
+        s.depth_counts = depth_.counts();
         s.depth_equations = solution.modalities[1].equations;
         s.depth_residual_m = solution.modalities[1].initial_rms;
-        s.region_counts = RegionCounts();
-        for (const RegionCounts& rc : camera_region_counts) s.region_counts += rc;
+        s.region_counts = region_counts;
         s.region_residual = solution.modalities[2].initial_rms;
         s.counts = counts;
         s.equations = solution.equations;
@@ -719,12 +673,10 @@ TrackResult Tracker::Track(const Frame& input_frame) {
   // (a search's result may come from another candidate than the last one aligned).
   const bool teach = status_ == TrackStatus::kTracking && r.confidence >= f.recover_confidence &&
                      r.summary.search_candidates == 0;
-  for (ColorHistograms& h : histograms_) {
-    if (teach) {
-      h.Commit(options_.region.learn_rate);
-    } else {
-      h.DiscardPending();
-    }
+  if (teach) {
+    region_.Commit(options_.region.learn_rate);
+  } else {
+    region_.DiscardPending();
   }
   r.status = status_;
   if (status_ == TrackStatus::kLost) {

@@ -27,10 +27,11 @@
 #include "unseen/mesh/mesh.h"
 #include "unseen/render/rasterizer.h"
 #include "unseen/track/depth_modality.h"
-#include "unseen/track/region_modality.h"
 #include "unseen/track/flow_solver.h"
 #include "unseen/track/motion_predictor.h"
+#include "unseen/track/photometric_modality.h"
 #include "unseen/track/pixel_selection.h"
+#include "unseen/track/region_modality.h"
 #include "unseen/track/preprocess.h"
 #include "unseen/track/tracker_options.h"
 #include "unseen/util/thread_pool.h"
@@ -204,11 +205,12 @@ class Tracker {
   std::unique_ptr<MotionPredictor> predictor_;
   std::unique_ptr<ThreadPool> pool_;  // null with one thread
   std::vector<std::unique_ptr<CameraWork>> work_;
-  // The current round's equations of each modality, per camera (reused: their capacity).
-  ModalityEquations photometric_, depth_, region_;
-  // Per camera, the region modality's colour statistics; learnt from the level-0 rounds of
-  // an alignment, committed when Track() finds the frame confidently tracked.
-  std::vector<ColorHistograms> histograms_;
+  // The modalities (modality.h), with the current round's equations (reused: their
+  // capacity). The region modality's colour statistics are learnt from the level-0 rounds
+  // of an alignment and committed when Track() finds the frame confidently tracked.
+  PhotometricModality photometric_;
+  DepthModality depth_;
+  RegionModality region_;
   bool learn_from_start_ = false;  // the next Track() starts at a given pose (Initialize)
 
   bool initialized_ = false;

@@ -90,7 +90,7 @@ TrackResult Tracker::AlignFirstFrame(const Frame& frame, const Rigid3d& given) {
   // What the joint alignment left for the next frames (its correction, the colour samples
   // it learnt) is kept unless the silhouette's result replaces it.
   const double joint_recent_correction_px = recent_correction_px_;
-  const std::vector<ColorHistograms> joint_histograms = histograms_;
+  const std::vector<ColorHistograms> joint_histograms = region_.histograms();
   use_photometric_ = false;
   TrackResult by_silhouette = AlignPredicted(frame, given);
   use_photometric_ = true;
@@ -107,7 +107,7 @@ TrackResult Tracker::AlignFirstFrame(const Frame& frame, const Rigid3d& given) {
     return by_silhouette;
   }
   recent_correction_px_ = joint_recent_correction_px;
-  histograms_ = joint_histograms;
+  region_.set_histograms(joint_histograms);
   r.summary.times += by_silhouette.summary.times;
   return r;
 }
