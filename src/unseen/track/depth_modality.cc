@@ -75,13 +75,17 @@ void AddDepthEquations(const DepthModalityInput& in, const DepthModalityOptions&
   const float max_step_depth = 0.02f;
 
   DepthCounts c;
-  // Offset the grid by half a step so that the samples sit inside the object, not on its
-  // box's border.
-  for (int y = 1 + step / 2; y < height - 1; y += step) {
+  // The grid is fixed to the image, not to the region of interest: wherever the region is
+  // placed, the same image pixels are sampled (a grid that moved with the region would
+  // sample other points of the surface each round, and the alignment would jitter).
+  auto first_on_grid = [step](int origin) {
+    return 1 + ((step - (origin + 1) % step) % step);  // >= 1, (first + origin) % step == 0
+  };
+  for (int y = first_on_grid(in.roi.y0); y < height - 1; y += step) {
     const float* row = rendered.ptr<float>(y);
     const float* up = rendered.ptr<float>(y - 1);
     const float* down = rendered.ptr<float>(y + 1);
-    for (int x = 1 + step / 2; x < width - 1; x += step) {
+    for (int x = first_on_grid(in.roi.x0); x < width - 1; x += step) {
       const float z = row[x];
       if (z <= 0.0f) continue;
       ++c.sampled;

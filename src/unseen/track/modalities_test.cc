@@ -86,6 +86,37 @@ TEST(MeshAppearance, TellsTexturedFromFlatModels) {
   EXPECT_TRUE(coloured.HasAppearance());
 }
 
+TEST_F(ModalityScene, DepthRowsDoNotDependOnWhereTheRegionIsPlaced) {
+  // The sampling grid is fixed to the image: two regions around the object, one pixel
+  // apart, sample the same surface points and give the same rows.
+  const PinholeCamera& cam = rig_.cameras[0].intrinsics;
+  RenderBuffers full;
+  RenderOptions depth_only;
+  depth_only.write_color = false;
+  Render(flat_, cam, rig_.cameras[0].cam_from_world() * truth_, cam.ImageRect(), depth_only, &full);
+  auto rows_for = [&](const PixelRect& roi) {
+    DepthModalityInput in;
+    cv::Mat rendered = full.depth(cv::Rect(roi.x0, roi.y0, roi.width(), roi.height())).clone();
+    in.rendered_depth = &rendered;
+    in.roi = roi;
+    in.level_camera = cam;
+    in.measured_depth = &frame_.depths[0];
+    in.camera = cam;
+    in.origin_in_cam = truth_.translation();
+    FlowEquations out;
+    DepthCounts counts;
+    AddDepthEquations(in, DepthModalityOptions(), &out, &counts);
+    double sum = 0.0;
+    for (int i = 0; i < out.size(); ++i) sum += out.rows[i].cwiseAbs().sum();
+    return std::make_pair(out.size(), sum);
+  };
+  const auto a = rows_for(PixelRect{150, 20, 370, 236});
+  const auto b = rows_for(PixelRect{151, 21, 371, 237});
+  EXPECT_GT(a.first, 100);
+  EXPECT_EQ(a.first, b.first);
+  EXPECT_NEAR(a.second, b.second, 1e-6 * a.second);
+}
+
 TEST_F(ModalityScene, DepthAloneRecoversThePose) {
   TrackerOptions options;
   options.photometric.enabled = false;
