@@ -134,6 +134,8 @@ class Tracker {
   int NumLevelsFor(const Rigid3d& world_from_obj) const;
 
   const Rig& rig() const { return rig_; }
+  // The model as rendered: the given one or, with LiveAppearanceOptions, the given one with
+  // projective textures from the last confidently tracked frame.
   const Mesh& model() const { return *model_; }
   const TrackerOptions& options() const { return options_; }
   const MotionPredictor& predictor() const { return *predictor_; }
