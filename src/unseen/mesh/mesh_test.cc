@@ -91,6 +91,18 @@ TEST(MeshCheck, RejectsEachKindOfBrokenMesh) {
   Mesh projector = Tetrahedron();
   projector.projectors.resize(1);
   ExpectCheckFails(projector, "projector 0");
+
+  // A projector's depth map must match its image; its occlusion tolerance must be >= 0.
+  Mesh depth = Tetrahedron();
+  depth.projectors.resize(1);
+  depth.projectors[0].image = cv::Mat(8, 8, CV_32FC3, cv::Scalar::all(0.5));
+  depth.projectors[0].camera = PinholeCamera::Centered(8, 8, 10.0);
+  depth.projectors[0].depth = cv::Mat(4, 8, CV_32FC1, cv::Scalar(1.0f));
+  ExpectCheckFails(depth, "projector 0 depth");
+  depth.projectors[0].depth = cv::Mat(8, 8, CV_32FC1, cv::Scalar(1.0f));
+  EXPECT_NO_THROW(depth.Check("model.ply"));
+  depth.projectors[0].depth_tolerance_m = std::numeric_limits<float>::quiet_NaN();
+  ExpectCheckFails(depth, "depth_tolerance_m");
 }
 
 TEST(MeshBounds, BoxAndSphere) {
