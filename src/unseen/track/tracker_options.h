@@ -88,8 +88,13 @@ struct FailureOptions {
   double good_share = 0.5;
   double min_used_px = 500;     // used pixels (all cameras)
   double good_used_px = 2500;
-  double good_residual_px = 0.3;
-  double bad_residual_px = 0.9;
+  // A camera's image is no render: sensor noise, blur, compression and shading the model
+  // lacks leave 0.5-0.6 px of normal-flow residual at the true pose on real footage (0.2-0.4
+  // on renders); the ratio to the reference residual below judges a frame against its own
+  // camera's floor. (0.3 / 0.9 declared a real RealSense cube lost through its motion-blurred
+  // stretch: colour only, 72.7 % within 5 cm/5 deg, 27 frames lost; 100 %, none lost now.)
+  double good_residual_px = 0.5;
+  double bad_residual_px = 1.2;
   double good_residual_ratio = 1.25;  // residual / reference residual
   double bad_residual_ratio = 1.75;
   // Weight of a new confident frame in the running reference residual (exponential mean),
