@@ -19,6 +19,7 @@
 #include <opencv2/core.hpp>
 
 #include "unseen/camera/camera.h"
+#include "unseen/geometry/rigid3.h"
 #include "unseen/track/flow_solver.h"
 #include "unseen/track/preprocess.h"
 #include "unseen/track/virtual_image.h"
@@ -65,10 +66,17 @@ class Modality {
   virtual void BeginRound(int num_cameras) {
     equations_.cameras.resize(num_cameras);
     for (FlowEquations& eq : equations_.cameras) eq.Clear();
+    round_rhs_.clear();
   }
   // Appends camera `round.camera`'s rows (rows in that camera's frame) and counts. Calls
   // for different cameras of a round may run concurrently.
   virtual void AddEquations(const ModalityRound& round) = 0;
+  // The pose has moved by `twist_in_cam[c]` since the round was rendered (camera c's frame:
+  // (v_c, w_c) about the object's origin at the round's pose): the rows' right-hand sides
+  // become what they measure there, so that the round's rows can be solved again without a
+  // new render (a Gauss-Newton step on the round's linearisation). This default follows
+  // each row's linear model, b - a . twist; a modality that can measure again overrides it.
+  virtual void MoveBy(const std::vector<Vector6d>& twist_in_cam);
   const ModalityEquations& equations() const { return equations_; }
 
  protected:
@@ -77,9 +85,13 @@ class Modality {
     eq.world_from_cam_rotation = round.world_from_cam_rotation;
     return eq;
   }
+  FlowEquations& CameraEquations(int camera) { return equations_.cameras[camera]; }
+  // Camera c's right-hand sides as the round built them (saved by the first MoveBy).
+  const std::vector<float>& RoundRhs(int camera);
 
  private:
   ModalityEquations equations_;
+  std::vector<std::vector<float>> round_rhs_;  // per camera; empty until the first MoveBy
 };
 
 // A modality whose counts (Counts: summable with +=) are kept per camera and summed.

@@ -14,10 +14,27 @@ class PhotometricModality : public CountingModality<SelectionCounts> {
  public:
   explicit PhotometricModality(const PixelSelectionOptions& options = {})
       : CountingModality("photometric"), options_(options) {}
+  void BeginRound(int num_cameras) override;
   void AddEquations(const ModalityRound& round) override;
+  // Measures the brightness differences again at the moved pose: each equation's surface
+  // point, moved by the twist, is projected into the round's pre-processed input, which is
+  // sampled there (bilinear) against the virtual image's value at the equation's pixel; the
+  // rows (the virtual image's gradients) stay. A point that leaves the input region keeps
+  // its row's linear model. The round's buffers must still hold (the tracker's do until
+  // the next round).
+  void MoveBy(const std::vector<Vector6d>& twist_in_cam) override;
 
  private:
+  // What one camera's round needs to measure again.
+  struct CameraRound {
+    std::vector<PhotometricSample> samples;  // one per equation
+    const cv::Mat* input = nullptr;          // the pre-processed input, of the size of roi
+    PixelRect roi;
+    PinholeCamera camera;
+    Eigen::Vector3d origin_in_cam = Eigen::Vector3d::Zero();
+  };
   PixelSelectionOptions options_;
+  std::vector<CameraRound> rounds_;
 };
 
 }  // namespace unseen

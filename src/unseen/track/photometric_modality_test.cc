@@ -6,6 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <vector>
+
 #include "unseen/image/filters.h"
 #include "unseen/mesh/primitives.h"
 #include "unseen/track/depth_modality.h"
@@ -34,7 +37,8 @@ class ModalityRoundTest : public ::testing::Test {
     measured_depth_ = cv::Mat(cam.height, cam.width, CV_32FC1, cv::Scalar(1.6f));
     depth_render.depth.copyTo(measured_depth_, depth_render.mask);
 
-    const Rigid3d start(truth.rotation(), truth.translation() + Eigen::Vector3d(0.002, 0, 0));
+    start_ = Rigid3d(truth.rotation(), truth.translation() + Eigen::Vector3d(0.002, 0, 0));
+    const Rigid3d& start = start_;
     roi_ = PixelRect{150, 30, 370, 230};
     input_roi_ = DownsampledRegion(image_, 0, roi_);
     double ms = 0.0;
@@ -58,6 +62,7 @@ class ModalityRoundTest : public ::testing::Test {
   }
   Rig rig_;
   Mesh cube_;
+  Rigid3d start_;  // the round's pose: 2 mm to the right of the frame's
   cv::Mat image_, measured_depth_, input_roi_;
   PixelRect roi_;
   VirtualImage virtual_image_;
@@ -96,6 +101,73 @@ TEST_F(ModalityRoundTest, EachModalityFillsTheCameraOfTheRound) {
   round_.first_frame = false;
   region.AddEquations(round_);
   EXPECT_EQ(region.equations().size(), 0);
+}
+
+// RMS normal flow (pixels) of a modality's equations of camera `c`.
+double RmsNormalFlow(const Modality& m, int c) {
+  const FlowEquations& eq = m.equations().cameras[c];
+  double sum = 0.0;
+  for (int i = 0; i < eq.size(); ++i) {
+    const double px = double(eq.rhs[i]) * eq.inv_grad_norm[i];
+    sum += px * px;
+  }
+  return eq.size() > 0 ? std::sqrt(sum / eq.size()) : 0.0;
+}
+
+TEST_F(ModalityRoundTest, PhotometricRowsMeasureAgainAtAMovedPose) {
+  // Blur alone: LINF and the shading transfer, normalised around the rendered pose, hold
+  // part of the offset in the virtual image itself.
+  PreprocessOptions plain;
+  plain.use_linf = false;
+  plain.shading_transfer = false;
+  const PinholeCamera& cam = rig_.cameras[0].intrinsics;
+  double ms = 0.0;
+  ASSERT_TRUE(ComposeVirtualImage(cube_, cam, start_, roi_, PixelRect(), input_roi_, true, plain, 0,
+                                  nullptr, &virtual_image_, &ms, &ms));
+  Preprocess(virtual_image_.composite, plain, 0, true, &virtual_pre_);
+  Preprocess(input_roi_, plain, 0, true, &input_pre_);
+  PhotometricModality photometric;
+  photometric.BeginRound(2);
+  photometric.AddEquations(round_);
+  const FlowEquations& eq = photometric.equations().cameras[1];
+  ASSERT_GT(eq.size(), 1000);
+  const std::vector<float> rendered_rhs = eq.rhs;
+  const double at_start = RmsNormalFlow(photometric, 1);
+  std::vector<Vector6d> twist(2, Vector6d::Zero());
+  twist[1](0) = -0.002;
+  photometric.MoveBy(twist);
+  const double at_truth = RmsNormalFlow(photometric, 1);
+  EXPECT_LT(at_truth, 0.6 * at_start);
+  twist[1](0) = +0.002;  // twice as far off instead
+  photometric.MoveBy(twist);
+  EXPECT_GT(RmsNormalFlow(photometric, 1), at_start);
+  // Moves are from the rendered pose, not from the last move; no move, the rendered rows.
+  photometric.MoveBy(std::vector<Vector6d>(2, Vector6d::Zero()));
+  for (int i = 0; i < eq.size(); ++i) EXPECT_NEAR(eq.rhs[i], rendered_rhs[i], 1e-5f) << i;
+  EXPECT_THROW(photometric.MoveBy(std::vector<Vector6d>(1, Vector6d::Zero())), Error);
+}
+
+TEST_F(ModalityRoundTest, OtherRowsFollowTheirLinearModelWhenMoved) {
+  RegionModality region(RegionModalityOptions(), 2);
+  region.BeginRound(2);
+  round_.first_frame = true;
+  region.AddEquations(round_);
+  const FlowEquations& eq = region.equations().cameras[1];
+  ASSERT_GT(eq.size(), 50);
+  const std::vector<float> rendered_rhs = eq.rhs;
+  std::vector<Vector6d> twist(2, Vector6d::Zero());
+  twist[1] << -0.002, 0.001, 0.003, 0.01, -0.02, 0.005;
+  region.MoveBy(twist);
+  region.MoveBy(twist);  // not cumulative
+  const Eigen::Matrix<float, 6, 1> t = twist[1].cast<float>();
+  for (int i = 0; i < eq.size(); ++i) {
+    EXPECT_NEAR(eq.rhs[i], rendered_rhs[i] - eq.rows[i].dot(t), 1e-4f) << i;
+  }
+  // A new round forgets the rendered right-hand sides of the last one.
+  region.BeginRound(2);
+  region.AddEquations(round_);
+  region.MoveBy(std::vector<Vector6d>(2, Vector6d::Zero()));
+  for (int i = 0; i < eq.size(); ++i) EXPECT_NEAR(eq.rhs[i], rendered_rhs[i], 1e-5f) << i;
 }
 
 TEST_F(ModalityRoundTest, ARoundWithoutItsImagesIsAnError) {

@@ -73,7 +73,8 @@ SelectionCounts& SelectionCounts::operator+=(const SelectionCounts& o) {
 }
 
 void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options,
-                  FlowEquations* out, SelectionCounts* counts) {
+                  FlowEquations* out, SelectionCounts* counts,
+                  std::vector<PhotometricSample>* samples) {
   const PreprocessedImage& v = *in.virtual_image;
   const PreprocessedImage& im = *in.input_image;
   const int w = in.roi.width(), h = in.roi.height();
@@ -104,15 +105,32 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
   std::vector<int> block_used(block_cols * block_rows, 0);
   std::vector<int> block_passed(block_cols * block_rows, 0);  // passed (4.13)-(4.15)
   const int first_row = out->size();
+  const size_t first_sample = samples ? samples->size() : 0;
   std::vector<int> row_block;  // block of each row appended here
 
   for (int y = 0; y < h; ++y) {
     int* row_gradient = block_gradient.data() + (y / block) * block_cols;
     int* row_used = block_used.data() + (y / block) * block_cols;
     int* row_passed = block_passed.data() + (y / block) * block_cols;
+    const uint8_t* reg = in.region->ptr<uint8_t>(y);
+    const float* dep = in.depth->ptr<float>(y);
+    const float* vb = v.blurred.ptr<float>(y);
     // Appends `row` as the equation row . twist = b of pixel (x, y), noting its block.
-    auto add_equation = [&](int x, float b, float inv_grad_norm) {
+    // `weight`: the channels' weights in the equation, for its PhotometricSample.
+    auto add_equation = [&](int x, float b, float inv_grad_norm, const float weight[3]) {
       out->Add(row, b, inv_grad_norm);
+      if (samples) {
+        PhotometricSample& sample = samples->emplace_back();
+        sample.x = float(in.roi.x0 + x);
+        sample.y = float(in.roi.y0 + y);
+        sample.z = dep[x];
+        float value = 0.0f;
+        for (int j = 0; j < 3; ++j) {
+          sample.weight[j] = weight[j];
+          value += weight[j] * vb[3 * x + j];
+        }
+        sample.virtual_value = value;
+      }
       row_block.push_back((y / block) * block_cols + x / block);
       ++c.equations;
     };
@@ -120,9 +138,6 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
       ++c.used;
       ++row_used[x / block];
     };
-    const uint8_t* reg = in.region->ptr<uint8_t>(y);
-    const float* dep = in.depth->ptr<float>(y);
-    const float* vb = v.blurred.ptr<float>(y);
     const float* vgx = v.gx.ptr<float>(y);
     const float* vgy = v.gy.ptr<float>(y);
     const float* ib = im.blurred.ptr<float>(y);
@@ -221,8 +236,10 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
           }
           const bool by_y = d > a;
           float sgx = 0, sgy = 0, sit = 0;
+          float signs[3];
           for (int j = 0; j < 3; ++j) {
             const float s = (by_y ? gy[j] : gx[j]) < 0.0f ? -1.0f : 1.0f;
+            signs[j] = s;
             sgx += s * gx[j];
             sgy += s * gy[j];
             sit += s * it[j];
@@ -233,7 +250,7 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
             continue;
           }
           FlowRowInCamera(fx, fy, cx, cy, origin, px, py, z, sgx, sgy, row);
-          add_equation(x, -sit, 1.0f / std::sqrt(g2));
+          add_equation(x, -sit, 1.0f / std::sqrt(g2), signs);
           count_used(x);
           break;
         }
@@ -250,7 +267,7 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
             continue;
           }
           FlowRowInCamera(fx, fy, cx, cy, origin, px, py, z, ggx, ggy, row);
-          add_equation(x, -git, 1.0f / std::sqrt(g2));
+          add_equation(x, -git, 1.0f / std::sqrt(g2), kGreyWeights);
           count_used(x);
           break;
         }
@@ -264,7 +281,9 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
               continue;
             }
             FlowRowInCamera(fx, fy, cx, cy, origin, px, py, z, gx[j], gy[j], row);
-            add_equation(x, -it[j], 1.0f / std::sqrt(sq[j]));
+            float channel[3] = {0.0f, 0.0f, 0.0f};
+            channel[j] = 1.0f;
+            add_equation(x, -it[j], 1.0f / std::sqrt(sq[j]), channel);
             ++added;
           }
           if (added == 0) {
@@ -312,6 +331,7 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
           out->rows[kept] = out->rows[from];
           out->rhs[kept] = out->rhs[from];
           out->inv_grad_norm[kept] = out->inv_grad_norm[from];
+          if (samples) (*samples)[first_sample + (kept - first_row)] = (*samples)[first_sample + i];
         }
         ++kept;
       }
@@ -319,6 +339,7 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
       out->rows.resize(kept);
       out->rhs.resize(kept);
       out->inv_grad_norm.resize(kept);
+      if (samples) samples->resize(first_sample + (kept - first_row));
     }
   }
   *counts += c;

@@ -96,10 +96,22 @@ struct SelectionInput {
   Eigen::Vector3d origin_in_cam = Eigen::Vector3d::Zero();  // object origin, camera frame
 };
 
+// Where an equation's brightness difference comes from, so that it can be measured again
+// after the pose moved without rendering anew (PhotometricModality::MoveBy): the equation's
+// right-hand side is -(sum_j weight[j] * Ii_j(x, y) - virtual_value), Ii the pre-processed
+// input at the level pixel (x, y) of a surface point at camera-frame depth z.
+struct PhotometricSample {
+  float x = 0, y = 0, z = 0;        // level pixel, metres
+  float weight[3] = {0, 0, 0};      // per BGR channel
+  float virtual_value = 0;          // sum_j weight[j] * Iv_j(x, y)
+};
+
 // Appends the equations of the selected pixels to `out` (rows in the camera frame, see
-// FlowRowInCamera) and adds to `counts`. Tests are applied in the order gradient (4.8),
+// FlowRowInCamera) and adds to `counts`; with `samples`, one PhotometricSample per
+// equation appended, in the same order. Tests are applied in the order gradient (4.8),
 // occlusion (4.13)-(4.15), directedness (3.6, redundancy mode), normal flow (4.9).
 void SelectPixels(const SelectionInput& input, const PixelSelectionOptions& options,
-                  FlowEquations* out, SelectionCounts* counts);
+                  FlowEquations* out, SelectionCounts* counts,
+                  std::vector<PhotometricSample>* samples = nullptr);
 
 }  // namespace unseen

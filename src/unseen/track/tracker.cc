@@ -155,6 +155,7 @@ void Tracker::SetModel(Mesh model) {
   // not hold for the new one. The colour statistics are the object's and its
   // surroundings', not the model's: they stay.
   residual_reference_px_ = 0.0;
+  area_reference_px_ = 0.0;
 }
 
 void Tracker::StartWithGivenModel() {
@@ -229,6 +230,7 @@ void Tracker::Initialize(const Rigid3d& world_from_obj) {
   bad_frames_ = 0;
   recent_correction_px_ = std::numeric_limits<double>::infinity();
   residual_reference_px_ = 0.0;
+  area_reference_px_ = 0.0;
   region_.Reset();
   StartWithGivenModel();
   learn_from_start_ = true;
@@ -407,6 +409,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
     w->input_preprocess_ms = 0.0;
   }
   Rigid3d pose = start;
+  std::vector<Vector6d> moved_in_cam(ncam, Vector6d::Zero());
 
   for (int level = s.num_levels - 1; level >= 0; --level) {
     // Region of interest (3.5): at the coarsest level the bounding sphere's rectangle,
@@ -523,6 +526,11 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
           {&photometric_.equations(), &depth_.equations(), &region_.equations()}, options_.solver);
       if (coarsest && iteration == 0) s.start_region_counts += region_counts;
       if (level == 0) {
+        s.object_px = 0.0;
+        for (int c = 0; c < ncam; ++c) {
+          const CameraWork& w = *work_[c];
+          if (w.active && w.virtual_ok) s.object_px += cv::countNonZero(w.virtual_image.mask);
+        }
         s.depth_counts = depth_.counts();
         s.depth_equations = solution.modalities[1].equations;
         s.depth_residual_m = solution.modalities[1].initial_rms;
@@ -555,8 +563,45 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
                        twist(4), twist(5));
       ++s.iterations_per_level[level];
       if (level == 0) s.last_update_px = update_px;
+      if (update_px < min_update_px) {
+        s.times.solve_ms += timer.ElapsedMilliseconds();
+        break;
+      }
+      // Solve this round's rows again at the moved pose, measuring the input anew
+      // (Modality::MoveBy), instead of rendering: most of a round's correction for a
+      // fraction of its cost. The level ends when the round's rows, so re-solved, moved the
+      // object little; else the next round renders at the new pose.
+      // The last round of a level does not re-solve: what it would move would not be
+      // judged by a render; nor do re-solves go on once they stop shrinking.
+      Vector6d moved = twist;  // since this round's render
+      const int resamples = iteration + 1 < max_iterations ? po.resample_iterations : 0;
+      for (int k = 0; k < resamples && update_px >= min_update_px; ++k) {
+        for (int c = 0; c < ncam; ++c) {
+          const Eigen::Matrix3d cam_from_world = cam_from_world_[c].RotationMatrix();
+          moved_in_cam[c].head<3>() = cam_from_world * moved.head<3>();
+          moved_in_cam[c].tail<3>() = cam_from_world * moved.tail<3>();
+        }
+        if (use_photometric_) photometric_.MoveBy(moved_in_cam);
+        depth_.MoveBy(moved_in_cam);
+        if (options_.region.enabled) region_.MoveBy(moved_in_cam);
+        const FlowSolution again = SolveJoint(
+            {&photometric_.equations(), &depth_.equations(), &region_.equations()}, options_.solver);
+        if (!again.ok) break;
+        Vector6d step = again.twist;
+        const double step_px = UpdatePixels(pose, step, level);
+        if (!(step_px < update_px)) break;  // not converging on these rows: render anew
+        update_px = step_px;
+        pose = ApplyTwist(pose, step);
+        moved += step;
+        ++s.resamples;
+        if (level == 0) s.last_update_px = update_px;
+        UNSEEN_LOG_DEBUG("level {} iteration {} re-solve {}: update {:.3f} px", level, iteration,
+                         k + 1, update_px);
+      }
       s.times.solve_ms += timer.ElapsedMilliseconds();
-      if (update_px < min_update_px) break;
+      if (resamples > 0 && UpdatePixels(round_pose, moved, level) < po.rerender_px) {
+        break;
+      }
     }
   }
   for (const auto& w : work_) {
@@ -658,11 +703,22 @@ TrackResult Tracker::Track(const Frame& input_frame) {
     predictor_->Reset(r.world_from_obj);
     last_good_ = r.world_from_obj;
   }
+  if (status_ == TrackStatus::kLost && bad_frames_ > f.area_memory_frames) {
+    area_reference_px_ = 0.0;
+  }
   // The reference residual follows the confident frames that fit about as well as it, so
   // that a drift into a worse fit does not raise it; it is kept while lost, to judge the
   // re-acquired pose by the same floor.
   const double residual = r.summary.initial_residual_px;
   if (status_ == TrackStatus::kTracking && r.confidence >= f.recover_confidence) {
+    // The object's on-screen area follows the confident frames (FailureOptions::
+    // min_area_ratio).
+    if (r.summary.object_px > 0.0) {
+      area_reference_px_ = area_reference_px_ > 0.0
+                               ? area_reference_px_ + f.residual_reference_rate *
+                                                          (r.summary.object_px - area_reference_px_)
+                               : r.summary.object_px;
+    }
     if (residual_reference_px_ <= 0.0) {
       residual_reference_px_ = residual;
     } else if (residual < f.good_residual_ratio * residual_reference_px_) {

@@ -52,6 +52,8 @@ struct SolveSummary {
   int num_levels = 0;                    // pyramid levels used
   std::vector<int> iterations_per_level; // solves; index = level (0 = full resolution)
   int renders = 0;                       // render-solve rounds over all levels
+  int resamples = 0;                     // solves that re-measured a round's rows instead
+  double object_px = 0.0;  // the object's rendered area in the last level-0 round, all cameras
   SelectionCounts counts;                // last round at the finest level, all cameras
   int equations = 0;                     // equations of that round
   double initial_residual_px = 0.0;      // RMS normal flow |It|/|grad| before its update
@@ -157,7 +159,10 @@ class Tracker {
   // that the model's appearance fits the image (PhotometricOptions::min_start_fit,
   // start_drag_px); a model that fails them is tracked without the photometric modality.
   TrackResult AlignFirstFrame(const Frame& frame, const Rigid3d& given);
+  // The confidence of an alignment: what the modalities vouch for, times the plausibility
+  // of the object's on-screen area (FailureOptions::min_area_ratio).
   double Confidence(const SolveSummary& summary) const;
+  double ModalityConfidence(const SolveSummary& summary) const;
   // The photometric modality's own judgement of the alignment in [0, 1] (FailureOptions:
   // support, residual, convergence), whatever the other modalities say.
   double PhotometricFit(const SolveSummary& summary) const;
@@ -224,6 +229,8 @@ class Tracker {
   std::unique_ptr<Reacquisition> reacquisition_;
   // Running mean of the residual of the confident frames (FailureOptions); 0 = none yet.
   double residual_reference_px_ = 0.0;
+  // Running mean of the object's on-screen area in the confident frames, level-0 pixels; 0 = none.
+  double area_reference_px_ = 0.0;
 };
 
 }  // namespace unseen

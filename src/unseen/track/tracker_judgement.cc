@@ -37,6 +37,16 @@ double Tracker::PhotometricFit(const SolveSummary& s) const {
 double Tracker::Confidence(const SolveSummary& s) const {
   const FailureOptions& f = options_.failure;
   if (s.equations < f.min_pixels) return 0.0;
+  double area_term = 1.0;
+  if (area_reference_px_ > 0.0 && s.object_px > 0.0) {
+    const double ratio = s.object_px / area_reference_px_;
+    area_term = Ramp(std::min(ratio, 1.0 / ratio), f.min_area_ratio, f.good_area_ratio);
+  }
+  return area_term * ModalityConfidence(s);
+}
+
+double Tracker::ModalityConfidence(const SolveSummary& s) const {
+  const FailureOptions& f = options_.failure;
   const double photometric = use_photometric_ ? PhotometricFit(s) : 0.0;
   // The silhouette judges the frame of a model without appearance; with measured depth to
   // guard it, it also vouches for a frame whose texture says little (motion blur). Measured

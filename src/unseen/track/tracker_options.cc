@@ -27,6 +27,10 @@ void PyramidOptions::Check() const {
                "pyramid.coarse_min_update_px {} must be >= 0", coarse_min_update_px);
   UNSEEN_CHECK(max_step_px > 0.0 && std::isfinite(max_step_px),
                "pyramid.max_step_px {} must be > 0", max_step_px);
+  UNSEEN_CHECK(resample_iterations >= 0 && resample_iterations <= 100,
+               "pyramid.resample_iterations {} must be in [0, 100]", resample_iterations);
+  UNSEEN_CHECK(rerender_px >= 0.0 && std::isfinite(rerender_px),
+               "pyramid.rerender_px {} must be >= 0", rerender_px);
   UNSEEN_CHECK(rim_px >= 0 && rim_px <= 20, "pyramid.rim_px {} must be in [0, 20]", rim_px);
   UNSEEN_CHECK(min_adaptive_levels >= 1 && min_adaptive_levels <= max_levels,
                "pyramid.min_adaptive_levels {} must be in [1, max_levels = {}]",
@@ -63,6 +67,11 @@ void FailureOptions::Check() const {
   UNSEEN_CHECK(min_pixels >= 6, "failure.min_pixels {} must be >= 6", min_pixels);
   UNSEEN_CHECK(min_region_lines >= 1, "failure.min_region_lines {} must be >= 1",
                min_region_lines);
+  UNSEEN_CHECK(0.0 <= min_area_ratio && min_area_ratio < good_area_ratio && good_area_ratio <= 1.0,
+               "failure: need 0 <= min_area_ratio ({}) < good_area_ratio ({}) <= 1",
+               min_area_ratio, good_area_ratio);
+  UNSEEN_CHECK(area_memory_frames >= 0, "failure.area_memory_frames {} must be >= 0",
+               area_memory_frames);
   UNSEEN_CHECK(lost_confidence >= 0.0 && lost_confidence <= 1.0,
                "failure.lost_confidence {} must be in [0, 1]", lost_confidence);
   UNSEEN_CHECK(recover_confidence >= lost_confidence && recover_confidence <= 1.0,
@@ -236,6 +245,8 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"coarse_max_iterations", Field(&py.coarse_max_iterations)},
         {"coarse_min_update_px", Field(&py.coarse_min_update_px)},
         {"max_step_px", Field(&py.max_step_px)},
+        {"resample_iterations", Field(&py.resample_iterations)},
+        {"rerender_px", Field(&py.rerender_px)},
         {"rim_px", Field(&py.rim_px)},
         {"supersampled_levels", Field(&py.supersampled_levels)},
         {"adaptive_levels", Field(&py.adaptive_levels)},
@@ -266,6 +277,9 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"bad_update_px", Field(&fa.bad_update_px)},
         {"min_pixels", Field(&fa.min_pixels)},
         {"min_region_lines", Field(&fa.min_region_lines)},
+        {"min_area_ratio", Field(&fa.min_area_ratio)},
+        {"good_area_ratio", Field(&fa.good_area_ratio)},
+        {"area_memory_frames", Field(&fa.area_memory_frames)},
         {"lost_confidence", Field(&fa.lost_confidence)},
         {"lost_after_frames", Field(&fa.lost_after_frames)},
         {"recover_confidence", Field(&fa.recover_confidence)},

@@ -45,6 +45,13 @@ struct PyramidOptions {
   int coarse_max_iterations = 6;
   double coarse_min_update_px = 0.3;
   double max_step_px = 4.0;       // one update moves the object at most this far, level px
+  // After a round's solve, up to this many solves of the same rows re-measured at the moved
+  // pose (Modality::MoveBy: the photometric modality samples the input anew, the others
+  // follow their rows' linear models) before the next render; 0: every solve renders. A
+  // level ends when a round's first update is below the level's min update, or when all
+  // its solves together moved the object less than rerender_px (level pixels).
+  int resample_iterations = 2;
+  double rerender_px = 0.5;
   // Blurred rim around the rendered mask whose pixels give photometric rows, px. None by
   // default: a rim's rows compare the composed virtual image, whose outside is the input,
   // and pull towards a smaller model wherever the model's shading differs from the image;
@@ -108,6 +115,16 @@ struct FailureOptions {
   // The region modality's agreement (RegionModalityOptions) stands in for the photometric
   // terms above when it is higher and rests on at least this many correspondence lines.
   int min_region_lines = 20;
+  // The object's rendered area against the running mean of the confident frames' (at
+  // residual_reference_rate): a pose that shows the object far smaller or larger than it has
+  // just been is doubtful whatever the modalities say (a solve can settle on a model shrunk
+  // to a few dozen pixels far behind the object, all of which fit). The smaller of the
+  // ratio and its inverse is ramped from [min_area_ratio, good_area_ratio] to [0, 1].
+  // Lost for more than area_memory_frames bad frames in a row, the area is forgotten (the
+  // object may really have moved much nearer or farther meanwhile).
+  double min_area_ratio = 0.2;
+  double good_area_ratio = 0.4;
+  int area_memory_frames = 30;
   double lost_confidence = 0.25;   // a frame below this is bad
   int lost_after_frames = 2;       // this many bad frames in a row: lost (hysteresis)
   double recover_confidence = 0.5; // while lost, a frame above this re-acquires

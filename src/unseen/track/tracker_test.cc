@@ -229,6 +229,33 @@ TEST_F(TrackerScene, PoseFarOutsideTheCaptureRangeGetsLowConfidence) {
   }
 }
 
+TEST_F(TrackerScene, AnObjectFarSmallerThanJustTrackedIsDoubted) {
+  Tracker tracker(rig_, cube_);
+  tracker.Initialize(truth_);
+  for (int i = 0; i < 3; ++i) ASSERT_GT(tracker.Track({image_}).confidence, 0.5);
+  // The same cube 2.5 times as far along its line of sight: aligned at its true pose it
+  // fits, but it covers a sixth of the area it has just covered.
+  const Rigid3d far(truth_.rotation(), 2.5 * truth_.translation());
+  const cv::Mat far_image =
+      Synthesize(cube_, rig_.cameras[0], far, Background(rig_.cameras[0].intrinsics, 1));
+  const TrackResult doubted = tracker.Align({far_image}, far);
+  EXPECT_LT(doubted.confidence, tracker.options().failure.lost_confidence) << doubted.BriefReport();
+  EXPECT_GT(doubted.summary.object_px, 0.0);
+  // A tracker that has not seen the cube nearer trusts the same alignment, and so does one
+  // that has but does not judge the area.
+  Tracker fresh(rig_, cube_);
+  fresh.Initialize(far);
+  const TrackResult trusted = fresh.Align({far_image}, far);
+  EXPECT_GT(trusted.confidence, 0.5) << trusted.BriefReport();
+  TrackerOptions no_area;
+  no_area.failure.min_area_ratio = 0.0;
+  no_area.failure.good_area_ratio = 1e-9;
+  Tracker unguarded(rig_, cube_, no_area);
+  unguarded.Initialize(truth_);
+  for (int i = 0; i < 3; ++i) ASSERT_GT(unguarded.Track({image_}).confidence, 0.5);
+  EXPECT_GT(unguarded.Align({far_image}, far).confidence, 0.5);
+}
+
 TEST(TrackerMultiCamera, TwoCamerasBeatOneOnDepth) {
   // Two cameras 0.6 m apart verging on the object; noisy images.
   Rig rig;
