@@ -1,6 +1,8 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/track/photometric_modality.h"
 
+#include <opencv2/imgproc.hpp>
+
 #include "unseen/util/error.h"
 
 namespace unseen {
@@ -32,6 +34,20 @@ void PhotometricModality::AddEquations(const ModalityRound& round) {
   r.camera = round.level_camera;
   r.origin_in_cam = round.origin_in_cam;
   SelectPixels(in, options_, &CameraEquations(round), &CameraCounts(round), &r.samples);
+  const cv::Mat& mask = round.virtual_image->mask;
+  if (remeasure_margin_px_ > 0) {
+    const int size = 2 * remeasure_margin_px_ + 1;
+    cv::erode(mask, interior_, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(size, size)),
+              cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
+  } else {
+    mask.copyTo(interior_);
+  }
+  r.remeasure.resize(r.samples.size());
+  for (size_t i = 0; i < r.samples.size(); ++i) {
+    const int x = static_cast<int>(r.samples[i].x) - round.roi.x0;
+    const int y = static_cast<int>(r.samples[i].y) - round.roi.y0;
+    r.remeasure[i] = interior_.ptr<uint8_t>(y)[x] != 0;
+  }
 }
 
 void PhotometricModality::MoveBy(const std::vector<Vector6d>& twist_in_cam) {
@@ -62,7 +78,8 @@ void PhotometricModality::MoveBy(const std::vector<Vector6d>& twist_in_cam) {
       const Eigen::Vector3f moved = origin + rotation * (point - origin) + translation;
       const float u = fx * moved.x() / moved.z() + cx - float(r.roi.x0);
       const float v = fy * moved.y() / moved.z() + cy - float(r.roi.y0);
-      if (!(moved.z() > 0.0f) || !(u >= 0.0f && v >= 0.0f && u < max_x && v < max_y)) {
+      if (!r.remeasure[i] || !(moved.z() > 0.0f) ||
+          !(u >= 0.0f && v >= 0.0f && u < max_x && v < max_y)) {
         eq.rhs[i] = rhs[i] - eq.rows[i].dot(t);
         continue;
       }

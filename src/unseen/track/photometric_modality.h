@@ -12,29 +12,39 @@ namespace unseen {
 
 class PhotometricModality : public CountingModality<SelectionCounts> {
  public:
-  explicit PhotometricModality(const PixelSelectionOptions& options = {})
-      : CountingModality("photometric"), options_(options) {}
+  // `remeasure_margin_px`: MoveBy measures again only the equations at least this far
+  // (level pixels) inside the rendered silhouette.
+  explicit PhotometricModality(const PixelSelectionOptions& options = {},
+                               int remeasure_margin_px = 0)
+      : CountingModality("photometric"), options_(options),
+        remeasure_margin_px_(remeasure_margin_px) {}
   void BeginRound(int num_cameras) override;
   void AddEquations(const ModalityRound& round) override;
   // Measures the brightness differences again at the moved pose: each equation's surface
   // point, moved by the twist, is projected into the round's pre-processed input, which is
   // sampled there (bilinear) against the virtual image's value at the equation's pixel; the
-  // rows (the virtual image's gradients) stay. A point that leaves the input region keeps
-  // its row's linear model. The round's buffers must still hold (the tracker's do until
-  // the next round).
+  // rows (the virtual image's gradients) stay. An equation nearer the silhouette than the
+  // margin, or whose point leaves the input region, keeps its row's linear model: the
+  // virtual image there mixes in the input around the rendered pose (and LINF and the
+  // shading transfer were normalised around it), so measured again it would pull back
+  // towards that pose. The round's buffers must still hold (the tracker's do until the
+  // next round).
   void MoveBy(const std::vector<Vector6d>& twist_in_cam) override;
 
  private:
   // What one camera's round needs to measure again.
   struct CameraRound {
     std::vector<PhotometricSample> samples;  // one per equation
+    std::vector<uint8_t> remeasure;          // per equation: inside the margin
     const cv::Mat* input = nullptr;          // the pre-processed input, of the size of roi
     PixelRect roi;
     PinholeCamera camera;
     Eigen::Vector3d origin_in_cam = Eigen::Vector3d::Zero();
   };
   PixelSelectionOptions options_;
+  int remeasure_margin_px_ = 0;
   std::vector<CameraRound> rounds_;
+  cv::Mat interior_;  // the rendered mask eroded by the margin (scratch)
 };
 
 }  // namespace unseen

@@ -145,6 +145,20 @@ TEST_F(ModalityRoundTest, PhotometricRowsMeasureAgainAtAMovedPose) {
   photometric.MoveBy(std::vector<Vector6d>(2, Vector6d::Zero()));
   for (int i = 0; i < eq.size(); ++i) EXPECT_NEAR(eq.rhs[i], rendered_rhs[i], 1e-5f) << i;
   EXPECT_THROW(photometric.MoveBy(std::vector<Vector6d>(1, Vector6d::Zero())), Error);
+
+  // With a margin wider than the object no equation is measured again: all follow their
+  // rows' linear model.
+  PhotometricModality linear(PixelSelectionOptions(), 1000);
+  linear.BeginRound(2);
+  linear.AddEquations(round_);
+  const FlowEquations& leq = linear.equations().cameras[1];
+  ASSERT_EQ(leq.size(), eq.size());
+  twist[1](0) = -0.002;
+  linear.MoveBy(twist);
+  const Eigen::Matrix<float, 6, 1> t = twist[1].cast<float>();
+  for (int i = 0; i < leq.size(); ++i) {
+    EXPECT_NEAR(leq.rhs[i], rendered_rhs[i] - leq.rows[i].dot(t), 1e-5f) << i;
+  }
 }
 
 TEST_F(ModalityRoundTest, OtherRowsFollowTheirLinearModelWhenMoved) {

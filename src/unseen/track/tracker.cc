@@ -110,7 +110,7 @@ Tracker::Tracker(const Rig& rig, Mesh model, const TrackerOptions& options)
     cam_from_world_.push_back(c.cam_from_world());
     work_.push_back(std::make_unique<CameraWork>());
   }
-  photometric_ = PhotometricModality(options_.selection);
+  photometric_ = PhotometricModality(options_.selection, options_.pyramid.resample_margin_px);
   depth_ = DepthModality(options_.depth);
   region_ = RegionModality(options_.region, rig_.size());
   predictor_ = MakeMotionPredictor(options_.predictor);
@@ -571,10 +571,13 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
       // (Modality::MoveBy), instead of rendering: most of a round's correction for a
       // fraction of its cost. The level ends when the round's rows, so re-solved, moved the
       // object little; else the next round renders at the new pose.
+      // Only at the finest level: at the coarse ones, whose few rows lie mostly near the
+      // silhouette, re-solves drifted (photometric alone lost the held-out spider at once).
       // The last round of a level does not re-solve: what it would move would not be
       // judged by a render; nor do re-solves go on once they stop shrinking.
       Vector6d moved = twist;  // since this round's render
-      const int resamples = iteration + 1 < max_iterations ? po.resample_iterations : 0;
+      const int resamples =
+          level == 0 && iteration + 1 < max_iterations ? po.resample_iterations : 0;
       for (int k = 0; k < resamples && update_px >= min_update_px; ++k) {
         for (int c = 0; c < ncam; ++c) {
           const Eigen::Matrix3d cam_from_world = cam_from_world_[c].RotationMatrix();

@@ -29,6 +29,8 @@ void PyramidOptions::Check() const {
                "pyramid.max_step_px {} must be > 0", max_step_px);
   UNSEEN_CHECK(resample_iterations >= 0 && resample_iterations <= 100,
                "pyramid.resample_iterations {} must be in [0, 100]", resample_iterations);
+  UNSEEN_CHECK(resample_margin_px >= 0 && resample_margin_px <= 64,
+               "pyramid.resample_margin_px {} must be in [0, 64]", resample_margin_px);
   UNSEEN_CHECK(rerender_px >= 0.0 && std::isfinite(rerender_px),
                "pyramid.rerender_px {} must be >= 0", rerender_px);
   UNSEEN_CHECK(rim_px >= 0 && rim_px <= 20, "pyramid.rim_px {} must be in [0, 20]", rim_px);
@@ -247,6 +249,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"max_step_px", Field(&py.max_step_px)},
         {"resample_iterations", Field(&py.resample_iterations)},
         {"rerender_px", Field(&py.rerender_px)},
+        {"resample_margin_px", Field(&py.resample_margin_px)},
         {"rim_px", Field(&py.rim_px)},
         {"supersampled_levels", Field(&py.supersampled_levels)},
         {"adaptive_levels", Field(&py.adaptive_levels)},

@@ -45,13 +45,16 @@ struct PyramidOptions {
   int coarse_max_iterations = 6;
   double coarse_min_update_px = 0.3;
   double max_step_px = 4.0;       // one update moves the object at most this far, level px
-  // After a round's solve, up to this many solves of the same rows re-measured at the moved
-  // pose (Modality::MoveBy: the photometric modality samples the input anew, the others
-  // follow their rows' linear models) before the next render; 0: every solve renders. A
-  // level ends when a round's first update is below the level's min update, or when all
-  // its solves together moved the object less than rerender_px (level pixels).
+  // At the finest level, after a round's solve, up to this many solves of the same rows
+  // re-measured at the moved pose (Modality::MoveBy: the photometric modality samples the
+  // input anew, the others follow their rows' linear models) before the next render; 0:
+  // every solve renders. The level ends when a round's first update is below
+  // min_update_px, or when all its solves together moved the object less than rerender_px.
   int resample_iterations = 2;
   double rerender_px = 0.5;
+  // Photometric equations nearer the rendered silhouette than this (level pixels) follow
+  // their linear model in those solves instead of being measured again.
+  int resample_margin_px = 4;
   // Blurred rim around the rendered mask whose pixels give photometric rows, px. None by
   // default: a rim's rows compare the composed virtual image, whose outside is the input,
   // and pull towards a smaller model wherever the model's shading differs from the image;
