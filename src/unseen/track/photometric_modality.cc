@@ -37,16 +37,16 @@ void PhotometricModality::AddEquations(const ModalityRound& round) {
   const cv::Mat& mask = round.virtual_image->mask;
   if (remeasure_margin_px_ > 0) {
     const int size = 2 * remeasure_margin_px_ + 1;
-    cv::erode(mask, interior_, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(size, size)),
+    cv::erode(mask, r.interior, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(size, size)),
               cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
   } else {
-    mask.copyTo(interior_);
+    mask.copyTo(r.interior);
   }
   r.remeasure.resize(r.samples.size());
   for (size_t i = 0; i < r.samples.size(); ++i) {
     const int x = static_cast<int>(r.samples[i].x) - round.roi.x0;
     const int y = static_cast<int>(r.samples[i].y) - round.roi.y0;
-    r.remeasure[i] = interior_.ptr<uint8_t>(y)[x] != 0;
+    r.remeasure[i] = r.interior.ptr<uint8_t>(y)[x] != 0;
   }
 }
 

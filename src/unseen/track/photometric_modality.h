@@ -36,6 +36,7 @@ class PhotometricModality : public CountingModality<SelectionCounts> {
   struct CameraRound {
     std::vector<PhotometricSample> samples;  // one per equation
     std::vector<uint8_t> remeasure;          // per equation: inside the margin
+    cv::Mat interior;                        // the rendered mask eroded by the margin
     const cv::Mat* input = nullptr;          // the pre-processed input, of the size of roi
     PixelRect roi;
     PinholeCamera camera;
@@ -43,8 +44,7 @@ class PhotometricModality : public CountingModality<SelectionCounts> {
   };
   PixelSelectionOptions options_;
   int remeasure_margin_px_ = 0;
-  std::vector<CameraRound> rounds_;
-  cv::Mat interior_;  // the rendered mask eroded by the margin (scratch)
+  std::vector<CameraRound> rounds_;  // per camera (AddEquations may run concurrently)
 };
 
 }  // namespace unseen

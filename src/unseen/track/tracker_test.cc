@@ -288,6 +288,15 @@ TEST(TrackerMultiCamera, TwoCamerasBeatOneOnDepth) {
   depth_error_one = std::abs(ro.world_from_obj.translation().z() - truth.translation().z());
   EXPECT_LT(Difference(rb.world_from_obj, truth).translation, 0.002) << rb.BriefReport();
   EXPECT_LT(depth_error_both, depth_error_one) << rb.BriefReport() << "\n" << ro.BriefReport();
+  // Each camera's rows built on a thread of its own: the same result, every time.
+  TrackerOptions two_threads;
+  two_threads.threads = 2;
+  Tracker parallel(rig, cube, two_threads);
+  for (int k = 0; k < 5; ++k) {
+    const TrackResult rp = parallel.Align(images, start);
+    EXPECT_LT(Difference(rp.world_from_obj, rb.world_from_obj).translation, 2e-5) << k;
+    EXPECT_EQ(rp.summary.counts.used, rb.summary.counts.used) << k;
+  }
 }
 
 TEST_F(TrackerScene, AdaptivePyramidUsesFewerLevelsForSmallMotionsAndAllForAJump) {
