@@ -5,8 +5,9 @@
 // pixels (3.4, 3.6), solve the 6-DoF optical flow of all cameras at once (3.1.1, 3.8) and
 // update the pose (4.7), coarse to fine over a pyramid whose depth follows the object's
 // on-screen size (3.3) and, while tracking, the size of the recent corrections, several
-// render-solve rounds per level with IRLS on top (3.9); then judge the result (confidence,
-// status) and re-acquire a lost object (3.9). Cameras, and the stages of one camera, can
+// render-solve rounds per level with IRLS on top (3.9), at the finest level each round's
+// rows solved again at the moved pose before the next render (Modality::MoveBy); then judge
+// the result (confidence, status) and re-acquire a lost object (3.9). Cameras, and the stages of one camera, can
 // run on several threads (TrackerOptions::threads).
 #pragma once
 

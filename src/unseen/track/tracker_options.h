@@ -8,10 +8,10 @@
 //                use_occlusion_rejection: true, block_min_share_ratio: 0.5, ...}
 //   solver:     {kernel: huber, kernel_width: 1.345, irls_iterations: 2}
 //   pyramid:    {max_levels: 4, min_object_px: 32, max_iterations_per_level: 6,
-//                adaptive_levels: true}
+//                adaptive_levels: true, resample_iterations: 2, rerender_px: 0.5}
 //   predictor:  {type: kalman, linear_accel_sigma: 2.0, min_confidence: 0.5}
 //   failure:    {lost_confidence: 0.25, lost_after_frames: 2, recover_confidence: 0.5,
-//                good_used_px: 2500, bad_residual_ratio: 1.75, ...}
+//                good_residual_px: 0.5, bad_residual_px: 1.2, min_area_ratio: 0.2, ...}
 //   reacquisition: {search_radii: 4, rotation_deg: 25, max_candidates: 12, ...}
 //   depth: {...}  region: {...}  live_appearance: {enabled: true, refresh_frames: 1, ...}
 //   frame_interval_s: 0.0333
