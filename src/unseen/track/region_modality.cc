@@ -46,6 +46,8 @@ void ColorHistograms::Reset() {
   foreground_.assign(n, 0.0f);
   background_.assign(n, 0.0f);
   posterior_.assign(n, 0.5f);
+  log_foreground_.assign(n, std::log(0.5f));
+  log_background_.assign(n, std::log(0.5f));
   DiscardPending();
 }
 
@@ -101,6 +103,9 @@ void ColorHistograms::UpdatePosterior() {
   for (size_t i = 0; i < posterior_.size(); ++i) {
     const float f = foreground_[i] + floor, b = background_[i] + floor;
     posterior_[i] = f / (f + b);
+    const float p = std::clamp(posterior_[i], kMinPosterior, 1.0f - kMinPosterior);
+    log_foreground_[i] = std::log(p);
+    log_background_[i] = std::log(1.0f - p);
   }
 }
 
@@ -181,6 +186,7 @@ void AddRegionEquations(const RegionModalityInput& in, const RegionModalityOptio
   const float fx = float(in.camera.fx), fy = float(in.camera.fy);
   const float cx = float(in.camera.cx), cy = float(in.camera.cy);
   std::vector<float> log_fg(samples + 1), log_bg(samples + 1), posterior(samples);
+  std::vector<int> bins(samples);
   std::vector<double> log_p(samples + 1);
   RegionCounts c;
   for (const ContourSample& cs : SampleContour(mask, options.max_lines)) {
@@ -237,7 +243,8 @@ void AddRegionEquations(const RegionModalityInput& in, const RegionModalityOptio
         }
       }
       previous = bgr;
-      posterior[k] = solve ? histograms->Foreground(bgr) : 0.5f;
+      bins[k] = histograms->Bin(bgr);
+      posterior[k] = solve ? histograms->Posterior(bins[k]) : 0.5f;
       if (learn) {
         const float s = float(k - half) + 0.5f;
         if (s < -options.learn_margin_px) histograms->Count(bgr, true);
@@ -259,15 +266,9 @@ void AddRegionEquations(const RegionModalityInput& in, const RegionModalityOptio
     // log P(d) for the contour between samples d - 1 and d (d = first .. last + 1):
     // foreground before it, background after it. Prefix sums of the two logs.
     log_fg[first] = 0.0f;
-    for (int k = first; k <= last; ++k) {
-      const float p = std::clamp(posterior[k], 0.02f, 0.98f);
-      log_fg[k + 1] = log_fg[k] + std::log(p);
-    }
+    for (int k = first; k <= last; ++k) log_fg[k + 1] = log_fg[k] + histograms->LogForeground(bins[k]);
     log_bg[last + 1] = 0.0f;
-    for (int k = last; k >= first; --k) {
-      const float p = std::clamp(posterior[k], 0.02f, 0.98f);
-      log_bg[k] = log_bg[k + 1] + std::log(1.0f - p);
-    }
+    for (int k = last; k >= first; --k) log_bg[k] = log_bg[k + 1] + histograms->LogBackground(bins[k]);
     double best = -1e30;
     for (int d = first; d <= last + 1; ++d) {
       log_p[d] = double(log_fg[d]) + double(log_bg[d]);

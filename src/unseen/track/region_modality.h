@@ -74,6 +74,12 @@ class ColorHistograms {
   // Posterior of foreground for a BGR colour in [0, 1].
   float Foreground(const float* bgr) const { return posterior_[Bin(bgr)]; }
   int Bin(const float* bgr) const;
+  float Posterior(int bin) const { return posterior_[bin]; }
+  // log p and log(1 - p) of a bin's posterior p clamped to [kMinPosterior, 1 - kMinPosterior]
+  // (tabulated: the contour posterior of every line sample needs both).
+  float LogForeground(int bin) const { return log_foreground_[bin]; }
+  float LogBackground(int bin) const { return log_background_[bin]; }
+  static constexpr float kMinPosterior = 0.02f;
   // Adds a colour to the pending foreground or background counts.
   void Count(const float* bgr, bool foreground);
   // Blends the pending counts (normalised) into the histograms with `rate` (1 on the
@@ -87,6 +93,7 @@ class ColorHistograms {
   int bins_ = 16, shift_ = 4;
   bool learnt_ = false;
   std::vector<float> foreground_, background_, posterior_;
+  std::vector<float> log_foreground_, log_background_;
   std::vector<float> pending_foreground_, pending_background_;
   double pending_foreground_count_ = 0.0, pending_background_count_ = 0.0;
 };
