@@ -46,11 +46,11 @@ std::string SolveSummary::BriefReport() const {
     iters += fmt::format("{}{}", iters.empty() ? "" : "/", iterations_per_level[l]);
   }
   return fmt::format(
-      "levels {} iters {} renders {} | px cand {} grad- {} occ- {}/{}/{} undir- {} flow- {} "
+      "levels {} iters {} renders {} re-solves {} | px cand {} grad- {} occ- {}/{}/{} undir- {} flow- {} "
       "block- {} used {} (share {:.2f} block {:.2f}) | res {:.3f}->{:.3f} px, last upd {:.3f} "
       "px, corr {:.1f} px{}{}{} | ms pred {:.3f} rend {:.3f} pre {:.3f} sel {:.3f} solve {:.3f} "
       "total {:.3f}",
-      num_levels, iters, renders, counts.candidates, counts.rejected_gradient,
+      num_levels, iters, renders, resamples, counts.candidates, counts.rejected_gradient,
       counts.rejected_input_gradient, counts.rejected_direction, counts.rejected_magnitude,
       counts.rejected_undirected, counts.rejected_normal_flow, counts.rejected_block, counts.used,
       share, counts.BlockShare(),
@@ -576,9 +576,9 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
       // The last round of a level does not re-solve: what it would move would not be
       // judged by a render; nor do re-solves go on once they stop shrinking.
       Vector6d moved = twist;  // since this round's render
-      const int resamples =
+      const int resolves =
           level == 0 && iteration + 1 < max_iterations ? po.resample_iterations : 0;
-      for (int k = 0; k < resamples && update_px >= min_update_px; ++k) {
+      for (int k = 0; k < resolves && update_px >= min_update_px; ++k) {
         for (int c = 0; c < ncam; ++c) {
           const Eigen::Matrix3d cam_from_world = cam_from_world_[c].RotationMatrix();
           moved_in_cam[c].head<3>() = cam_from_world * moved.head<3>();
@@ -597,12 +597,12 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
         pose = ApplyTwist(pose, step);
         moved += step;
         ++s.resamples;
-        if (level == 0) s.last_update_px = update_px;
+        s.last_update_px = update_px;
         UNSEEN_LOG_DEBUG("level {} iteration {} re-solve {}: update {:.3f} px", level, iteration,
                          k + 1, update_px);
       }
       s.times.solve_ms += timer.ElapsedMilliseconds();
-      if (resamples > 0 && UpdatePixels(round_pose, moved, level) < po.rerender_px) {
+      if (resolves > 0 && UpdatePixels(round_pose, moved, level) < po.rerender_px) {
         break;
       }
     }

@@ -118,6 +118,15 @@ TEST(TrackerOptions, RejectsBadFilesNamingTheKey) {
   EXPECT_NE(message("pyramid: {max_levels: 2, min_adaptive_levels: 3}").find("min_adaptive_levels"),
             std::string::npos);
   EXPECT_NE(message("selection: {color_mode: hsv}").find("hsv"), std::string::npos);
+  EXPECT_NE(message("pyramid: {resample_iterations: -1}").find("pyramid.resample_iterations"),
+            std::string::npos);
+  EXPECT_NE(message("pyramid: {rerender_px: .nan}").find("pyramid.rerender_px"), std::string::npos);
+  EXPECT_NE(message("pyramid: {resample_margin_px: 100}").find("pyramid.resample_margin_px"),
+            std::string::npos);
+  EXPECT_NE(message("failure: {min_area_ratio: 0.5, good_area_ratio: 0.4}").find("min_area_ratio"),
+            std::string::npos);
+  EXPECT_NE(message("failure: {area_memory_frames: -2}").find("failure.area_memory_frames"),
+            std::string::npos);
   EXPECT_NE(message("a: [").find("t.yaml"), std::string::npos);
   EXPECT_THROW(LoadTrackerOptions("/nonexistent/tracker.yaml"), Error);
 }
