@@ -19,6 +19,14 @@ void LiveAppearanceOptions::Check() const {
                "live_appearance.occlusion_tolerance {} must be > 0", occlusion_tolerance);
   UNSEEN_CHECK(photometric_weight > 0.0 && std::isfinite(photometric_weight),
                "live_appearance.photometric_weight {} must be > 0", photometric_weight);
+  UNSEEN_CHECK(poor_fit_share >= 0.0 && poor_fit_share <= 1.0,
+               "live_appearance.poor_fit_share {} must be in [0, 1]", poor_fit_share);
+  UNSEEN_CHECK(poor_fit_frames >= 0, "live_appearance.poor_fit_frames {} must be >= 0",
+               poor_fit_frames);
+  UNSEEN_CHECK(poor_fit_best_share >= 0.0 && poor_fit_best_share <= 1.0,
+               "live_appearance.poor_fit_best_share {} must be in [0, 1]", poor_fit_best_share);
+  UNSEEN_CHECK(poor_fit_confidence >= 0.0 && poor_fit_confidence <= 1.0,
+               "live_appearance.poor_fit_confidence {} must be in [0, 1]", poor_fit_confidence);
 }
 
 std::optional<Projector> CaptureProjector(const Mesh& model, const PinholeCamera& camera,

@@ -47,6 +47,18 @@ struct LiveAppearanceOptions {
   // depth above all) nor tell a highlight that moved over a glossy surface from the surface
   // moving; the silhouette must keep the upper hand, the colours settle what it leaves open.
   double photometric_weight = 0.1;
+  // Colours that never fitted, whatever `enabled` says: a model tracked confidently
+  // (confidence >= poor_fit_confidence, by the silhouette or measured depth) whose colours
+  // kept less than poor_fit_share of the rendered-gradient pixels (the photometric share of
+  // SolveSummary) for poor_fit_frames tracked frames in a row, and never more than
+  // poor_fit_best_share since the start, takes its colours from the frames. (Models lit
+  // like their renders keep 0.56-0.90 of their pixels; a real camera's cube at best 0.54,
+  // a textured model under a circling lamp 0.39. An occluder lowers the share for a while,
+  // but the frames before it showed a good fit.) 0 frames: never.
+  double poor_fit_share = 0.4;
+  int poor_fit_frames = 5;
+  double poor_fit_best_share = 0.6;
+  double poor_fit_confidence = 0.5;
   void Check() const;
 };
 

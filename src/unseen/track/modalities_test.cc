@@ -166,7 +166,7 @@ TEST_F(ModalityScene, AModelWhoseColoursDisagreeTracksByItsSilhouette) {
   EXPECT_TRUE(matching.photometric_in_use());
 }
 
-TEST_F(ModalityScene, AnAppearanceThatDragsTheFirstPoseIsDropped) {
+TEST_F(ModalityScene, AnAppearanceThatDragsTheFirstPoseIsDemoted) {
   // As above, with the fit check off: the second first-frame check sees the photometric
   // term move the given pose much further than the silhouette alone does. A rim of
   // photometric rows around the silhouette, where the composed virtual image of the wrong
@@ -176,6 +176,23 @@ TEST_F(ModalityScene, AnAppearanceThatDragsTheFirstPoseIsDropped) {
   options.photometric.min_start_fit = 0.0;
   options.pyramid.rim_px = 3;
   options.photometric.start_drag_px = 2.0;  // it drags 3 px here, the silhouette 0.6 px
+  {
+    // By default the colours stay at a tenth of their weight and the silhouette leads.
+    Tracker demoted(rig_, textured, options);
+    demoted.Initialize(truth_);
+    Frame colour_only;
+    colour_only.images = frame_.images;
+    TrackResult r;
+    for (int k = 0; k < 4; ++k) r = demoted.Track(colour_only);
+    EXPECT_TRUE(demoted.photometric_in_use());
+    EXPECT_TRUE(demoted.photometric_demoted());
+    EXPECT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
+    const PoseDifference e = Difference(r.world_from_obj, truth_);
+    EXPECT_LT(e.translation, 0.004) << r.BriefReport();
+    EXPECT_LT(e.rotation_rad, 1.0 * kDeg) << r.BriefReport();
+  }
+  // With no weight left to them, they are dropped.
+  options.photometric.dragged_weight = 0.0;
   Tracker tracker(rig_, textured, options);
   ExpectTrackedBySilhouette(&tracker);
   // Off, the photometric modality stays (and drags).
@@ -186,6 +203,7 @@ TEST_F(ModalityScene, AnAppearanceThatDragsTheFirstPoseIsDropped) {
   colour_only.images = frame_.images;
   unchecked.Track(colour_only);
   EXPECT_TRUE(unchecked.photometric_in_use());
+  EXPECT_FALSE(unchecked.photometric_demoted());
 }
 
 TEST_F(ModalityScene, AllModalitiesTogether) {

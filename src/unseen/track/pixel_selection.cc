@@ -72,6 +72,13 @@ SelectionCounts& SelectionCounts::operator+=(const SelectionCounts& o) {
   return *this;
 }
 
+double SelectionCounts::RejectionGathering() const {
+  if (block_used <= 0 || gradient_pixels() <= 0) return 0.0;
+  const double share = double(used) / double(gradient_pixels());
+  if (share >= 1.0) return 0.0;
+  return std::clamp((BlockShare() - share) / (1.0 - share), 0.0, 1.0);
+}
+
 void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options,
                   FlowEquations* out, SelectionCounts* counts,
                   std::vector<PhotometricSample>* samples) {

@@ -82,6 +82,12 @@ struct SelectionCounts {
   // view when the rejected pixels are gathered in whole blocks (an occluder), near the
   // overall share when they are spread evenly (a misaligned pose); 0 without blocks.
   double BlockShare() const { return block_used > 0 ? block_share_sum / block_used : 0.0; }
+  // How far the rejected pixels gather in whole blocks, [0, 1]: BlockShare() against the
+  // overall share s = used / gradient_pixels(), (BlockShare - s) / (1 - s). Near 1 when
+  // what was rejected lies in blocks of its own (an occluder), near 0 when rejections are
+  // spread evenly over the object (a misaligned pose, a change of light); 0 without blocks
+  // or without rejections.
+  double RejectionGathering() const;
   SelectionCounts& operator+=(const SelectionCounts& o);
 };
 

@@ -180,6 +180,12 @@ TEST(PixelSelection, BlocksTellACoherentOccluderFromAMisalignment) {
   // Misaligned: the rejections are spread, so the block share falls with the share.
   EXPECT_LT(share(m), 0.8 * share(c));
   EXPECT_LT(m.BlockShare(), 0.85 * c.BlockShare());
+  // So the occluder's rejections gather in blocks, the misaligned pose's do not.
+  // (This texture keeps only a third of its pixels in a clear view, so even the
+  // occluder's gathering is far from 1.)
+  EXPECT_GT(o.RejectionGathering(), 0.25);
+  EXPECT_LT(m.RejectionGathering(), 0.2);
+  EXPECT_GT(o.RejectionGathering(), 2.0 * m.RejectionGathering());
 
   // Block rejection drops the occluder's chance survivors, little of a clear view (weak blocks).
   cv::Mat covered_region = region.clone();

@@ -169,7 +169,27 @@ void Tracker::StartWithGivenModel() {
   live_appearance_ = po.enabled && lo.enabled && options_.region.enabled &&
                      (!has_appearance || lo.always);
   frames_since_capture_ = 0;
+  photometric_demoted_ = false;
+  dragged_at_start_ = false;
+  best_share_ = 0.0;
+  poor_fit_frames_ = 0;
   model_ = given_model_;
+}
+
+bool Tracker::ColoursNeverFitted(const TrackResult& r) {
+  const LiveAppearanceOptions& lo = options_.live_appearance;
+  if (lo.poor_fit_frames <= 0 || live_appearance_ || !use_photometric_ || dragged_at_start_ ||
+      !options_.region.enabled || model_ != given_model_) {
+    return false;
+  }
+  if (r.status != TrackStatus::kTracking || r.confidence < lo.poor_fit_confidence ||
+      r.summary.search_candidates > 0) {
+    return false;
+  }
+  const double share = r.summary.share;
+  best_share_ = std::max(best_share_, share);
+  poor_fit_frames_ = share < lo.poor_fit_share ? poor_fit_frames_ + 1 : 0;
+  return poor_fit_frames_ >= lo.poor_fit_frames && best_share_ < lo.poor_fit_best_share;
 }
 
 void Tracker::UpdateLiveAppearance(const Frame& frame, const TrackResult& r) {
@@ -199,6 +219,7 @@ void Tracker::UpdateLiveAppearance(const Frame& frame, const TrackResult& r) {
   }
   model_ = std::make_shared<const Mesh>(std::move(live));
   use_photometric_ = true;
+  photometric_demoted_ = false;  // colours from the frames have a weight of their own
   frames_since_capture_ = 0;
 }
 
@@ -401,6 +422,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
   photometric_model.min_scale = options_.solver.min_scale_px;
   photometric_model.weight = model_ != given_model_ ? options_.live_appearance.photometric_weight
                                                     : options_.photometric.weight;
+  if (photometric_demoted_) photometric_model.weight *= options_.photometric.dragged_weight;
   region_.DiscardPending();
   const bool use_depth = !frame.depths.empty();
   std::vector<int> jobs;  // c: camera c's virtual image; ncam + c: its input
@@ -672,6 +694,18 @@ TrackResult Tracker::Track(const Frame& input_frame) {
 
   TrackResult r = learn_from_start_ ? AlignFirstFrame(frame, predicted)
                                     : AlignPredicted(frame, predicted);
+  if (!learn_from_start_ && status_ == TrackStatus::kTracking &&
+      LightChanged(r.summary, !frame.depths.empty())) {
+    // The model's shading no longer matches the image: the silhouette leads from now on.
+    UNSEEN_LOG_INFO("tracker: frame {}: the light changed under the model's colours "
+                    "(photometric fit {:.2f}, rejections gathered {:.2f}); the silhouette leads",
+                    frame.frame_id, PhotometricFit(r.summary),
+                    r.summary.counts.RejectionGathering());
+    photometric_demoted_ = true;
+    const StageTimes first_times = r.summary.times;
+    r = AlignPredicted(frame, predicted);
+    r.summary.times += first_times;
+  }
   learn_from_start_ = false;
   if (status_ == TrackStatus::kLost && f.search_when_lost && r.confidence < f.recover_confidence) {
     // Re-acquisition (3.9): correlation seeds, translations and rotations around the last
@@ -748,6 +782,12 @@ TrackResult Tracker::Track(const Frame& input_frame) {
   if (!r.world_from_obj.IsValid()) {  // never report NaN
     r.world_from_obj = last_good_;
     r.confidence = 0.0;
+  }
+  if (ColoursNeverFitted(r)) {
+    UNSEEN_LOG_INFO("tracker: frame {}: the model's colours never fitted the images (photometric "
+                    "share {:.2f}, at best {:.2f}); it takes them from the tracked frames",
+                    frame.frame_id, r.summary.share, best_share_);
+    live_appearance_ = true;
   }
   UpdateLiveAppearance(frame, r);
   r.summary.times.predict_ms = predict_ms;

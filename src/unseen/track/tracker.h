@@ -147,6 +147,9 @@ class Tracker {
   // Whether the photometric modality runs for the current model (PhotometricOptions:
   // enabled, require_appearance, and the first frame's min_start_fit check).
   bool photometric_in_use() const { return use_photometric_; }
+  // Whether it runs demoted (PhotometricOptions::dragged_weight, light_change_fit): at a
+  // share of its weight, the silhouette judging the frames.
+  bool photometric_demoted() const { return use_photometric_ && photometric_demoted_; }
 
  private:
   struct CameraWork;
@@ -167,6 +170,11 @@ class Tracker {
   // The photometric modality's own judgement of the alignment in [0, 1] (FailureOptions:
   // support, residual, convergence), whatever the other modalities say.
   double PhotometricFit(const SolveSummary& summary) const;
+  // Whether the photometric fit judges the frames (in use and not demoted).
+  bool PhotometricJudges() const { return use_photometric_ && !photometric_demoted_; }
+  // Whether a tracked frame's alignment shows the light changed under the model's own
+  // colours (PhotometricOptions::light_change_fit); `has_depth`: the frame carries depth.
+  bool LightChanged(const SolveSummary& summary, bool has_depth) const;
   // The rectangle of `camera`'s pixels the object can cover at `cam_from_obj`: the
   // bounding sphere's rectangle (3.5, (4.16)-(4.21)) cut down to the projection of the
   // model's box, which is tighter for all but round objects. std::nullopt: out of view.
@@ -194,6 +202,9 @@ class Tracker {
   // After a frame tracked at `world_from_obj`: the model takes its colours from it when it
   // lives on the tracked frames' (live_appearance_) and the frame is confident enough.
   void UpdateLiveAppearance(const Frame& frame, const TrackResult& r);
+  // After a tracked frame: whether the model's own colours have fitted so poorly for so
+  // long that it should take them from the frames (LiveAppearanceOptions::poor_fit_share).
+  bool ColoursNeverFitted(const TrackResult& r);
 
   Rig rig_;
   std::vector<Rigid3d> cam_from_world_;
@@ -206,10 +217,21 @@ class Tracker {
   TrackerOptions options_;
   // The photometric modality runs for this model (PhotometricOptions::require_appearance).
   bool use_photometric_ = true;
+  // The model's colours drag the pose or no longer match the light: the photometric
+  // modality runs at PhotometricOptions::dragged_weight and the silhouette judges.
+  bool photometric_demoted_ = false;
+  // Demoted because the first frame found the model's colours dragging its pose: they are
+  // still the model's own, and anchor what the silhouette leaves open (a spin), which
+  // colours from the frames would let drift; they are kept.
+  bool dragged_at_start_ = false;
   // The model's own colours are not used (none, or the first frame found them misleading):
   // it takes them from the tracked frames (LiveAppearanceOptions).
   bool live_appearance_ = false;
   int frames_since_capture_ = 0;
+  // The model's own colours: the best photometric share of a confident frame since the
+  // start, and the confident frames in a row below LiveAppearanceOptions::poor_fit_share.
+  double best_share_ = 0.0;
+  int poor_fit_frames_ = 0;
   std::unique_ptr<MotionPredictor> predictor_;
   std::unique_ptr<ThreadPool> pool_;  // null with one thread
   std::vector<std::unique_ptr<CameraWork>> work_;

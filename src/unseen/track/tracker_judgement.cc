@@ -47,7 +47,7 @@ double Tracker::Confidence(const SolveSummary& s) const {
 
 double Tracker::ModalityConfidence(const SolveSummary& s) const {
   const FailureOptions& f = options_.failure;
-  const double photometric = use_photometric_ ? PhotometricFit(s) : 0.0;
+  const double photometric = PhotometricJudges() ? PhotometricFit(s) : 0.0;
   // The silhouette judges the frame of a model without appearance; with measured depth to
   // guard it, it also vouches for a frame whose texture says little (motion blur). Measured
   // depth, when there is some, must agree in every case.
@@ -62,13 +62,31 @@ double Tracker::ModalityConfidence(const SolveSummary& s) const {
     // Colours taken from the tracked frames vouch for the frame-to-frame fit only; the
     // silhouette, which judged these models before they had colours, still may.
     if (live_appearance_) return std::max(photometric, region_term);
-    return use_photometric_ ? photometric : region_term;
+    return PhotometricJudges() ? photometric : region_term;
   }
   const double depth_term =
       Ramp(depth_agreement, options_.depth.bad_agreement, options_.depth.good_agreement);
   // Depth alone (no image modality in use) judges by itself.
-  const bool image_judges = use_photometric_ || options_.region.enabled;
+  const bool image_judges = PhotometricJudges() || options_.region.enabled;
   return depth_term * (image_judges ? std::max(photometric, region_term) : 1.0);
+}
+
+bool Tracker::LightChanged(const SolveSummary& s, bool has_depth) const {
+  const PhotometricOptions& po = options_.photometric;
+  const RegionModalityOptions& ro = options_.region;
+  // Measured depth anchors the pose whatever the light does; colours from the frames
+  // follow the light already.
+  if (po.light_change_fit <= 0.0 || has_depth || !PhotometricJudges() || !ro.enabled ||
+      model_ != given_model_) {
+    return false;
+  }
+  if (s.region_counts.used < options_.failure.min_region_lines ||
+      s.region_counts.Agreement() < ro.good_agreement) {
+    return false;  // the silhouette does not vouch for the pose
+  }
+  return PhotometricFit(s) < po.light_change_fit &&
+         s.correction_px < po.light_change_correction_px &&
+         s.counts.RejectionGathering() < po.light_change_max_gathering;
 }
 
 TrackResult Tracker::AlignFirstFrame(const Frame& frame, const Rigid3d& given) {
@@ -108,13 +126,26 @@ TrackResult Tracker::AlignFirstFrame(const Frame& frame, const Rigid3d& given) {
   const double silhouette_px = by_silhouette.summary.correction_px;
   if (joint_px > po.start_drag_px && joint_px > po.start_drag_ratio * silhouette_px &&
       by_silhouette.confidence > 0.0) {
+    const StageTimes silhouette_times = by_silhouette.summary.times;
+    if (po.dragged_weight <= 0.0) {
+      UNSEEN_LOG_INFO("tracker: the model's appearance drags the first frame's pose {:.1f} px "
+                      "(the silhouette alone {:.1f} px); tracking by its silhouette",
+                      joint_px, silhouette_px);
+      use_photometric_ = false;
+      live_appearance_ = options_.live_appearance.enabled;
+      by_silhouette.summary.times += joint_times;
+      return by_silhouette;
+    }
+    // Demoted, not dropped: the silhouette leads, the colours settle what it leaves open.
     UNSEEN_LOG_INFO("tracker: the model's appearance drags the first frame's pose {:.1f} px "
-                    "(the silhouette alone {:.1f} px); tracking by its silhouette",
+                    "(the silhouette alone {:.1f} px); the silhouette leads",
                     joint_px, silhouette_px);
-    use_photometric_ = false;
-    live_appearance_ = options_.live_appearance.enabled;
-    by_silhouette.summary.times += joint_times;
-    return by_silhouette;
+    photometric_demoted_ = true;
+    dragged_at_start_ = true;
+    TrackResult demoted = AlignPredicted(frame, given);
+    demoted.summary.times += joint_times;
+    demoted.summary.times += silhouette_times;
+    return demoted;
   }
   recent_correction_px_ = joint_recent_correction_px;
   region_.set_histograms(joint_histograms);

@@ -135,6 +135,16 @@ void PhotometricOptions::Check() const {
                "photometric.start_drag_px {} must be >= 0", start_drag_px);
   UNSEEN_CHECK(start_drag_ratio >= 1.0 && std::isfinite(start_drag_ratio),
                "photometric.start_drag_ratio {} must be >= 1", start_drag_ratio);
+  UNSEEN_CHECK(dragged_weight >= 0.0 && dragged_weight <= 1.0,
+               "photometric.dragged_weight {} must be in [0, 1]", dragged_weight);
+  UNSEEN_CHECK(light_change_fit >= 0.0 && light_change_fit <= 1.0,
+               "photometric.light_change_fit {} must be in [0, 1]", light_change_fit);
+  UNSEEN_CHECK(light_change_correction_px >= 0.0 && std::isfinite(light_change_correction_px),
+               "photometric.light_change_correction_px {} must be >= 0",
+               light_change_correction_px);
+  UNSEEN_CHECK(light_change_max_gathering >= 0.0 && light_change_max_gathering <= 1.0,
+               "photometric.light_change_max_gathering {} must be in [0, 1]",
+               light_change_max_gathering);
 }
 
 namespace {
@@ -207,6 +217,10 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"min_start_fit", Field(&ph.min_start_fit)},
         {"start_drag_px", Field(&ph.start_drag_px)},
         {"start_drag_ratio", Field(&ph.start_drag_ratio)},
+        {"dragged_weight", Field(&ph.dragged_weight)},
+        {"light_change_fit", Field(&ph.light_change_fit)},
+        {"light_change_correction_px", Field(&ph.light_change_correction_px)},
+        {"light_change_max_gathering", Field(&ph.light_change_max_gathering)},
         {"weight", Field(&ph.weight)}}},
       {"preprocess",
        {{"use_linf", Field(&pp.use_linf)},
@@ -345,7 +359,11 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"refresh_frames", Field(&la.refresh_frames)},
         {"margin_px", Field(&la.margin_px)},
         {"occlusion_tolerance", Field(&la.occlusion_tolerance)},
-        {"photometric_weight", Field(&la.photometric_weight)}}},
+        {"photometric_weight", Field(&la.photometric_weight)},
+        {"poor_fit_share", Field(&la.poor_fit_share)},
+        {"poor_fit_frames", Field(&la.poor_fit_frames)},
+        {"poor_fit_best_share", Field(&la.poor_fit_best_share)},
+        {"poor_fit_confidence", Field(&la.poor_fit_confidence)}}},
   };
   UNSEEN_CHECK(root.IsMap(), "{}: expected a map at the top level", what);
   for (const auto& kv : root) {

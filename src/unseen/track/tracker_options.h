@@ -201,6 +201,22 @@ struct PhotometricOptions {
   // mismatch) and the object is tracked without the photometric modality; 0: never.
   double start_drag_px = 3.0;
   double start_drag_ratio = 2.0;
+  // A model whose appearance drags the first frame's pose is demoted, not dropped: the
+  // photometric modality keeps this share of its weight, the silhouette leads and judges
+  // the frames (the colours still settle what the silhouette leaves open, such as a spin
+  // about an axis of near symmetry). 0: dropped.
+  double dragged_weight = 0.1;
+  // Light that changes while tracking (a moving or pulsing lamp; frames without depth):
+  // when a tracked frame's photometric fit falls below light_change_fit while the
+  // silhouette agrees with the image (RegionModalityOptions::good_agreement), the object is
+  // where it was predicted (the alignment moved it less than light_change_correction_px,
+  // level-0 pixels) and the rejected pixels are spread over the object rather than
+  // gathered in blocks (RejectionGathering below light_change_max_gathering: an occluder
+  // gathers them), the model's shading no longer matches the image: the photometric
+  // modality is demoted as above and the frame aligned again. 0: never.
+  double light_change_fit = 0.5;
+  double light_change_correction_px = 1.5;
+  double light_change_max_gathering = 0.5;
   double weight = 1.0;
   void Check() const;
 };

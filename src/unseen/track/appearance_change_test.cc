@@ -1,0 +1,140 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// The tracker when the model's colours stop matching the images while it tracks: a light
+// that changes (the photometric modality is demoted, the silhouette leads), and colours
+// that never fitted (the model takes its colours from the tracked frames).
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "unseen/mesh/primitives.h"
+#include "unseen/track/test_scene.h"
+#include "unseen/track/tracker.h"
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+// The lettered cube seen as under another lamp: each face lit a little more or less
+// brightly, a slightly warmer light and the hard shadows of a grille across every face
+// (`shadow`: the light left in them), so that the model's own texture (lit evenly) no
+// longer matches what the camera sees while its silhouette and colours still do.
+Mesh Relit(const Mesh& model, float shadow_gain) {
+  Mesh relit = model;
+  const float gains[6] = {1.1f, 0.9f, 1.0f, 1.1f, 0.9f, 1.0f};
+  for (size_t f = 0; f < relit.materials.size(); ++f) {
+    cv::Mat& t = relit.materials[f].texture;
+    if (t.empty()) continue;
+    t = t.clone();
+    for (int y = 0; y < t.rows; ++y) {
+      cv::Vec3f* row = t.ptr<cv::Vec3f>(y);
+      for (int x = 0; x < t.cols; ++x) {
+        const float shadow = ((x + y) / 10) % 2 ? shadow_gain : 1.0f;
+        const float g = gains[f % 6] * shadow;
+        row[x] = cv::Vec3f(std::min(1.0f, 0.95f * g * row[x][0]), std::min(1.0f, g * row[x][1]),
+                           std::min(1.0f, g * row[x][2]));
+      }
+    }
+  }
+  return relit;
+}
+
+class AppearanceChange : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    rig_ = testing::OneCameraRig();
+    model_ = MakeLetteredCube(0.096, 64);
+    relit_ = Relit(model_, 0.6f);
+    background_ = testing::Background(rig_.cameras[0].intrinsics, 11);
+  }
+  // The cube drifting slowly sideways and turning, frame `k`.
+  Rigid3d Truth(int k) const {
+    return Rigid3d(ExpSO3(Eigen::Vector3d(0.45, 0.7 + 0.01 * k, 0.1)),
+                   Eigen::Vector3d(0.02 + 0.002 * k, -0.01, 1.0));
+  }
+  cv::Mat Image(const Mesh& seen, int k) const {
+    return testing::RenderOverBackground(seen, rig_.cameras[0], Truth(k), background_);
+  }
+  // Tracks frames [0, n), the first `matching` of them seen with the model's own colours,
+  // the rest relit; checks every frame is tracked at the truth.
+  void TrackSequence(Tracker* tracker, int n, int matching) const {
+    tracker->Initialize(Truth(0));
+    for (int k = 0; k < n; ++k) {
+      const TrackResult r = tracker->Track({Image(k < matching ? model_ : relit_, k)});
+      EXPECT_EQ(r.status, TrackStatus::kTracking) << "frame " << k << ": " << r.BriefReport();
+      const PoseDifference e = Difference(r.world_from_obj, Truth(k));
+      EXPECT_LT(e.translation, 0.005) << "frame " << k << ": " << r.BriefReport();
+      EXPECT_LT(e.rotation_rad, 1.5 * kDeg) << "frame " << k << ": " << r.BriefReport();
+    }
+  }
+  Rig rig_;
+  Mesh model_, relit_;
+  cv::Mat background_;
+};
+
+TEST_F(AppearanceChange, ALightChangeDemotesThePhotometricModality) {
+  // Three frames under the light the model was made with, then the light changes.
+  Tracker tracker(rig_, model_);
+  tracker.Initialize(Truth(0));
+  for (int k = 0; k < 3; ++k) tracker.Track({Image(model_, k)});
+  EXPECT_FALSE(tracker.photometric_demoted());
+  TrackSequence(&tracker, 10, 3);
+  EXPECT_TRUE(tracker.photometric_in_use());
+  EXPECT_TRUE(tracker.photometric_demoted());
+  // Colours that fitted at first are the model's to keep.
+  EXPECT_TRUE(tracker.model().projectors.empty());
+
+  // Without the check, the model's colours keep judging the frames, and condemn them.
+  TrackerOptions options;
+  options.photometric.light_change_fit = 0.0;
+  Tracker unchecked(rig_, model_, options);
+  unchecked.Initialize(Truth(0));
+  TrackResult r;
+  for (int k = 0; k < 10; ++k) r = unchecked.Track({Image(k < 3 ? model_ : relit_, k)});
+  EXPECT_FALSE(unchecked.photometric_demoted());
+  EXPECT_EQ(r.status, TrackStatus::kLost) << r.BriefReport();
+}
+
+TEST_F(AppearanceChange, ColoursThatNeverFittedComeFromTheFrames) {
+  // The camera sees the cube under a deeply shadowing grille from the first frame on: the
+  // model's colours fit well enough not to be dropped at once, but never well.
+  relit_ = Relit(model_, 0.3f);
+  TrackerOptions options;
+  options.photometric.light_change_fit = 0.0;  // this test is about the switch alone
+  Tracker tracker(rig_, model_, options);
+  TrackSequence(&tracker, 12, 0);
+  EXPECT_TRUE(tracker.photometric_in_use());
+  EXPECT_FALSE(tracker.model().projectors.empty())
+      << "the model should have taken its colours from the tracked frames";
+  // Off, the model keeps its own colours.
+  options.live_appearance.poor_fit_frames = 0;
+  Tracker kept(rig_, model_, options);
+  TrackSequence(&kept, 12, 0);
+  EXPECT_TRUE(kept.model().projectors.empty());
+}
+
+TEST(AppearanceChangeOptions, ParsedAndChecked) {
+  const TrackerOptions o = ParseTrackerOptions(
+      "photometric: {dragged_weight: 0.2, light_change_fit: 0.4, "
+      "light_change_correction_px: 2, light_change_max_gathering: 0.6}\n"
+      "live_appearance: {poor_fit_share: 0.3, poor_fit_frames: 4, poor_fit_best_share: 0.5, "
+      "poor_fit_confidence: 0.6}\n");
+  EXPECT_EQ(o.photometric.dragged_weight, 0.2);
+  EXPECT_EQ(o.photometric.light_change_fit, 0.4);
+  EXPECT_EQ(o.photometric.light_change_correction_px, 2.0);
+  EXPECT_EQ(o.photometric.light_change_max_gathering, 0.6);
+  EXPECT_EQ(o.live_appearance.poor_fit_share, 0.3);
+  EXPECT_EQ(o.live_appearance.poor_fit_frames, 4);
+  EXPECT_EQ(o.live_appearance.poor_fit_best_share, 0.5);
+  EXPECT_EQ(o.live_appearance.poor_fit_confidence, 0.6);
+  EXPECT_THROW(ParseTrackerOptions("photometric: {dragged_weight: 1.5}\n"), Error);
+  EXPECT_THROW(ParseTrackerOptions("photometric: {light_change_fit: -0.1}\n"), Error);
+  EXPECT_THROW(ParseTrackerOptions("photometric: {light_change_correction_px: .nan}\n"), Error);
+  EXPECT_THROW(ParseTrackerOptions("live_appearance: {poor_fit_frames: -1}\n"), Error);
+  EXPECT_THROW(ParseTrackerOptions("live_appearance: {poor_fit_best_share: 2}\n"), Error);
+}
+
+}  // namespace
+}  // namespace unseen
