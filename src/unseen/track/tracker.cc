@@ -130,6 +130,14 @@ Tracker::~Tracker() = default;
 
 void Tracker::SetModel(Mesh model) {
   model.Check("tracker model");
+  if (options_.simplify.enabled) {
+    SimplifyStats stats;
+    model = SimplifyFlatPatches(model, options_.simplify, &stats);
+    if (stats.output_triangles < stats.input_triangles) {
+      UNSEEN_LOG_INFO("tracker: model's flat patches simplified, {} -> {} triangles",
+                      stats.input_triangles, stats.output_triangles);
+    }
+  }
   Eigen::Vector3f centre;
   float radius = 0.0f;
   model.BoundingSphere(&centre, &radius);

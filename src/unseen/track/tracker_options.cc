@@ -121,6 +121,7 @@ void TrackerOptions::Check() const {
   depth.Check();
   region.Check();
   live_appearance.Check();
+  simplify.Check();
   reacquisition.Check();
   UNSEEN_CHECK(frame_interval_s > 0.0 && std::isfinite(frame_interval_s),
                "frame_interval_s {} must be > 0", frame_interval_s);
@@ -210,6 +211,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
   RegionModalityOptions& rg = o->region;
   PhotometricOptions& ph = o->photometric;
   LiveAppearanceOptions& la = o->live_appearance;
+  SimplifyOptions& si = o->simplify;
   const std::map<std::string, std::map<std::string, Setter>> sections = {
       {"photometric",
        {{"enabled", Field(&ph.enabled)},
@@ -364,6 +366,12 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"poor_fit_frames", Field(&la.poor_fit_frames)},
         {"poor_fit_best_share", Field(&la.poor_fit_best_share)},
         {"poor_fit_confidence", Field(&la.poor_fit_confidence)}}},
+      {"simplify",
+       {{"enabled", Field(&si.enabled)},
+        {"max_normal_angle_rad", Field(&si.max_normal_angle_rad)},
+        {"relative_tolerance", Field(&si.relative_tolerance)},
+        {"attribute_tolerance", Field(&si.attribute_tolerance)},
+        {"texture_shift_tolerance", Field(&si.texture_shift_tolerance)}}},
   };
   UNSEEN_CHECK(root.IsMap(), "{}: expected a map at the top level", what);
   for (const auto& kv : root) {

@@ -14,12 +14,14 @@
 //                good_residual_px: 0.5, bad_residual_px: 1.2, min_area_ratio: 0.2, ...}
 //   reacquisition: {search_radii: 4, rotation_deg: 25, max_candidates: 12, ...}
 //   depth: {...}  region: {...}  live_appearance: {enabled: true, refresh_frames: 1, ...}
+//   simplify: {enabled: true, max_normal_angle_rad: 1e-4, relative_tolerance: 1e-5, ...}
 //   frame_interval_s: 0.0333
 //   threads: 1
 #pragma once
 
 #include <string>
 
+#include "unseen/mesh/simplify.h"
 #include "unseen/track/depth_modality.h"
 #include "unseen/track/flow_solver.h"
 #include "unseen/track/live_appearance.h"
@@ -234,6 +236,10 @@ struct TrackerOptions {
   RegionModalityOptions region;  // the silhouette against learnt colour statistics
   // Colours from the tracked frames for a model without usable ones of its own.
   LiveAppearanceOptions live_appearance;
+  // The given model's flat patches are simplified losslessly before tracking
+  // (mesh/simplify.h): a boxy CAD model cut into thousands of triangles renders as fast as
+  // its faces need, with the same poses.
+  SimplifyOptions simplify;
   double frame_interval_s = 1.0 / 30.0;  // time between frames for the predictor, s
   // Threads for one frame (a ThreadPool): cameras are rendered, pre-processed and
   // selected in parallel; with one camera the input's pre-processing runs beside the first
