@@ -696,8 +696,9 @@ TrackResult Tracker::Track(const Frame& input_frame) {
   const FailureOptions& f = options_.failure;
 
   Timer timer;
-  const Rigid3d predicted =
-      status_ == TrackStatus::kLost ? last_good_ : predictor_->Predict(options_.frame_interval_s);
+  const Rigid3d predicted = status_ == TrackStatus::kLost
+                                ? Coast()
+                                : predictor_->Predict(options_.frame_interval_s);
   const double predict_ms = timer.ElapsedMilliseconds();
 
   TrackResult r = learn_from_start_ ? AlignFirstFrame(frame, predicted)
@@ -736,8 +737,7 @@ TrackResult Tracker::Track(const Frame& input_frame) {
   }
   if (status_ == TrackStatus::kTracking) {
     if (bad_frames_ >= f.lost_after_frames) {
-      status_ = TrackStatus::kLost;
-      predictor_->Reset(last_good_);
+      BecomeLost(predicted);
     } else if (r.confidence >= f.lost_confidence) {
       predictor_->Correct(r.world_from_obj, r.confidence);  // weighed by the confidence
       last_good_ = r.world_from_obj;
@@ -803,18 +803,35 @@ TrackResult Tracker::Track(const Frame& input_frame) {
   return r;
 }
 
+void Tracker::BecomeLost(const Rigid3d& predicted) {
+  status_ = TrackStatus::kLost;
+  coasted_frames_ = 0;
+  coast_ = predicted;
+  if (options_.failure.coast_frames == 0) {
+    predictor_->Reset(last_good_);
+    coast_ = last_good_;
+  }
+}
+
+Rigid3d Tracker::Coast() {
+  if (coasted_frames_ < options_.failure.coast_frames) {
+    coast_ = predictor_->Predict(options_.frame_interval_s);
+    ++coasted_frames_;
+  }
+  return coast_;
+}
+
 TrackResult Tracker::SkipFrame() {
   UNSEEN_CHECK(initialized_, "Tracker::SkipFrame called before Initialize()");
   Timer total;
   if (status_ == TrackStatus::kTracking) {
-    if (++bad_frames_ >= options_.failure.lost_after_frames) {
-      status_ = TrackStatus::kLost;
-      predictor_->Reset(last_good_);
-    } else {
-      predictor_->Predict(options_.frame_interval_s);  // the object moved on meanwhile
-    }
+    // The object moved on meanwhile.
+    const Rigid3d predicted = predictor_->Predict(options_.frame_interval_s);
+    if (++bad_frames_ >= options_.failure.lost_after_frames) BecomeLost(predicted);
     // The next frame is a frame interval further from the last correction.
     recent_correction_px_ = std::numeric_limits<double>::infinity();
+  } else {
+    Coast();
   }
   TrackResult r;
   r.world_from_obj = last_good_;

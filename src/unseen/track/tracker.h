@@ -194,6 +194,12 @@ class Tracker {
   void RunParallel(int n, const std::function<void(int)>& fn);
   // Image motion (pixels at `level`, largest over cameras) of the object under `twist`.
   double UpdatePixels(const Rigid3d& world_from_obj, const Vector6d& twist, int level) const;
+  // The tracker loses the object at a frame whose prediction was `predicted`: the motion
+  // model coasts on from there (FailureOptions::coast_frames).
+  void BecomeLost(const Rigid3d& predicted);
+  // While lost: the pose the motion model carries the object to this frame, or where it
+  // stopped after coast_frames.
+  Rigid3d Coast();
   // The re-acquisition search (reacquisition.h), made on first use for the current model.
   Reacquisition& Reacquirer();
   // The photometric modality's use for the given model, from PhotometricOptions and
@@ -247,6 +253,10 @@ class Tracker {
   TrackStatus status_ = TrackStatus::kTracking;
   int bad_frames_ = 0;
   Rigid3d last_good_;
+  // While lost: where the uncorrected motion model has carried the object, and for how
+  // many frames (FailureOptions::coast_frames).
+  Rigid3d coast_;
+  int coasted_frames_ = 0;
   // Decaying maximum of the recent corrections, level-0 pixels (infinite: unknown).
   double recent_correction_px_ = std::numeric_limits<double>::infinity();
   std::unique_ptr<Reacquisition> reacquisition_;

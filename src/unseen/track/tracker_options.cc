@@ -81,6 +81,8 @@ void FailureOptions::Check() const {
                recover_confidence, lost_confidence);
   UNSEEN_CHECK(lost_after_frames >= 1, "failure.lost_after_frames {} must be >= 1",
                lost_after_frames);
+  UNSEEN_CHECK(coast_frames >= 0 && coast_frames <= 1000,
+               "failure.coast_frames {} must be in [0, 1000]", coast_frames);
   UNSEEN_CHECK(search_offset > 0.0 && search_offset <= 10.0,
                "failure.search_offset {} must be in (0, 10]", search_offset);
 }
@@ -303,6 +305,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"lost_after_frames", Field(&fa.lost_after_frames)},
         {"recover_confidence", Field(&fa.recover_confidence)},
         {"search_when_lost", Field(&fa.search_when_lost)},
+        {"coast_frames", Field(&fa.coast_frames)},
         {"search_offset", Field(&fa.search_offset)}}},
       {"reacquisition",
        {{"use_correlation", Field(&re.use_correlation)},

@@ -137,6 +137,11 @@ struct FailureOptions {
   // around the last good one.
   bool search_when_lost = true;
   double search_offset = 0.5;      // translated candidates' step, bounding-sphere radii
+  // For this many frames after it was lost, the object is looked for first where its last
+  // motion carries it (the motion model runs on uncorrected: an object hidden by an
+  // occluder, or in a blur, goes on moving), then held there; the search still turns
+  // around the last good pose. 0: held at the last good pose at once.
+  int coast_frames = 10;
   void Check() const;
 };
 
