@@ -556,6 +556,7 @@ class Shader {
       v.depth_tolerance_m = p.depth_tolerance_m;
       projectors_.push_back(v);
     }
+    projector_triangles_.resize(projectors_.size());
   }
 
   const TextureView* textures() const { return textures_.data(); }
@@ -622,34 +623,50 @@ class Shader {
     if (!projectors_.empty()) {
       fallback_kind_ = kind_;
       kind_ = Kind::kProjective;
-      p0_ = mesh_.vertices[t[0]];
-      dp1_ = mesh_.vertices[t[1]] - p0_;
-      dp2_ = mesh_.vertices[t[2]] - p0_;
-      face_normal_ = dp1_.cross(dp2_);
+      // The point of barycentric (b1, b2) in each projector's frame is affine in them:
+      // q = q0 + b1 dq1 + b2 dq2, prepared once per triangle.
+      const Eigen::Vector3f p0 = mesh_.vertices[t[0]];
+      const Eigen::Vector3f dp1 = mesh_.vertices[t[1]] - p0;
+      const Eigen::Vector3f dp2 = mesh_.vertices[t[2]] - p0;
+      const Eigen::Vector3f face_normal = dp1.cross(dp2);
+      for (size_t k = 0; k < projectors_.size(); ++k) {
+        const ProjectorView& v = projectors_[k];
+        ProjectorTriangle& pt = projector_triangles_[k];
+        pt.q0 = v.rotation * p0 + v.translation;
+        pt.dq1 = v.rotation * dp1;
+        pt.dq2 = v.rotation * dp2;
+        pt.normal = v.rotation * face_normal;
+      }
     } else {
       fallback_kind_ = kind_;
     }
   }
 
   bool ProjectiveColor(float b1, float b2, float* bgr) const {
-    const Eigen::Vector3f p = p0_ + b1 * dp1_ + b2 * dp2_;
     int best = -1;
     float best_score = 0.0f, best_x = 0.0f, best_y = 0.0f;
+    const bool several = projectors_.size() > 1;
     for (size_t k = 0; k < projectors_.size(); ++k) {
       const ProjectorView& v = projectors_[k];
-      const Eigen::Vector3f q = v.rotation * p + v.translation;
+      const ProjectorTriangle& pt = projector_triangles_[k];
+      const Eigen::Vector3f q = pt.q0 + b1 * pt.dq1 + b2 * pt.dq2;
       if (!(q.z() > 0.0f)) continue;
-      const float x = v.fx * q.x() / q.z() + v.cx, y = v.fy * q.y() / q.z() + v.cy;
+      const float inv_z = 1.0f / q.z();
+      const float x = v.fx * q.x() * inv_z + v.cx, y = v.fy * q.y() * inv_z + v.cy;
       if (!(x >= -0.5f && y >= -0.5f && x < v.max_x && y < v.max_y)) continue;
       if (v.depth) {
         // Hidden from the projector: behind the surface it saw there, or it saw none.
-        const int px = std::clamp(static_cast<int>(std::lround(x)), 0, v.depth->cols - 1);
-        const int py = std::clamp(static_cast<int>(std::lround(y)), 0, v.depth->rows - 1);
+        // (x, y >= -0.5: adding a half and truncating rounds to the nearest pixel.)
+        const int px = std::min(static_cast<int>(x + 0.5f), v.depth->cols - 1);
+        const int py = std::min(static_cast<int>(y + 0.5f), v.depth->rows - 1);
         const float seen = v.depth->ptr<float>(py)[px];
         if (!(seen > 0.0f) || q.z() > seen + v.depth_tolerance_m) continue;
       }
-      // Cosine (times |n|) between the normal and the direction to the projector.
-      const float score = -(v.rotation * face_normal_).dot(q) / q.norm();
+      // Cosine (times |n|) between the normal and the direction to the projector: the
+      // surface must face it; a single projector needs no comparison.
+      const float facing = -pt.normal.dot(q);
+      if (!(facing > 0.0f)) continue;
+      const float score = several ? facing / q.norm() : 1.0f;
       if (score > best_score) {
         best = static_cast<int>(k);
         best_score = score;
@@ -671,7 +688,11 @@ class Shader {
   const TextureView* texture_ = nullptr;
   Eigen::Vector2f uv0_ = Eigen::Vector2f::Zero(), duv1_ = uv0_, duv2_ = uv0_;
   Eigen::Vector3f c0_ = Eigen::Vector3f::Zero(), dc1_ = c0_, dc2_ = c0_;
-  Eigen::Vector3f p0_ = c0_, dp1_ = c0_, dp2_ = c0_, face_normal_ = c0_;
+  // Per projector, the prepared triangle in its frame.
+  struct ProjectorTriangle {
+    Eigen::Vector3f q0, dq1, dq2, normal;
+  };
+  std::vector<ProjectorTriangle> projector_triangles_;
   // The triangle prepared for Normal().
   int normal_tri_ = -1;
   Eigen::Vector3f n0_ = Eigen::Vector3f::Zero(), dn1_ = n0_, dn2_ = n0_;
