@@ -226,6 +226,46 @@ TEST_F(ModalityScene, AllModalitiesTogether) {
   EXPECT_GT(r.summary.region_counts.used, 50);
 }
 
+TEST_F(ModalityScene, ASilhouetteOffItsContourVouchesLess) {
+  // The flat cube is tracked by its silhouette; then a second cube of the same colour
+  // stands right beside it. Its colours agree with the learnt statistics, but along that
+  // side the contour no longer sits where the image's edge is: the region modality's
+  // residual against its confident frames' lowers what it vouches for.
+  Mesh pair = flat_;
+  const int n = pair.num_vertices();
+  for (int v = 0; v < n; ++v) pair.vertices.push_back(flat_.vertices[v] + Eigen::Vector3f(0.07f, 0.0f, 0.0f));
+  for (const Eigen::Vector3i& t : flat_.triangles) {
+    pair.triangles.push_back(t + Eigen::Vector3i::Constant(n));
+  }
+  if (!pair.triangle_materials.empty()) {
+    pair.triangle_materials.insert(pair.triangle_materials.end(), flat_.triangle_materials.begin(),
+                                   flat_.triangle_materials.end());
+  }
+  if (!pair.uvs.empty()) pair.uvs.insert(pair.uvs.end(), flat_.uvs.begin(), flat_.uvs.end());
+  if (!pair.normals.empty()) {
+    pair.normals.insert(pair.normals.end(), flat_.normals.begin(), flat_.normals.end());
+  }
+  const cv::Mat crowded =
+      testing::RenderOverBackground(pair, rig_.cameras[0], truth_, background_);
+  auto confidence_beside_twin = [&](const TrackerOptions& options) {
+    Tracker tracker(rig_, flat_, options);
+    tracker.Initialize(truth_);
+    for (int k = 0; k < 5; ++k) tracker.Track({frame_.images[0]});
+    const TrackResult r = tracker.Align({crowded}, truth_, 1);
+    return r.confidence;
+  };
+  TrackerOptions judged;
+  TrackerOptions unjudged;  // ratios no residual reaches
+  unjudged.failure.good_region_residual_ratio = 1e3;
+  unjudged.failure.bad_region_residual_ratio = 1e4;
+  const double with_term = confidence_beside_twin(judged);
+  const double without_term = confidence_beside_twin(unjudged);
+  EXPECT_LT(with_term, 0.75 * without_term) << with_term << " vs " << without_term;
+  EXPECT_THROW(ParseTrackerOptions("failure: {good_region_residual_ratio: 3, "
+                                   "bad_region_residual_ratio: 2}\n"),
+               Error);
+}
+
 TEST_F(ModalityScene, DepthDisagreementMakesAPoseFarAwayLost) {
   // A start 30 cm behind the object (the image shows it, the depth does not agree):
   // the alignment cannot pull it in, and depth must not let it count as tracked.

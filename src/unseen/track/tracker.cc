@@ -163,6 +163,7 @@ void Tracker::SetModel(Mesh model) {
   // not hold for the new one. The colour statistics are the object's and its
   // surroundings', not the model's: they stay.
   residual_reference_px_ = 0.0;
+  region_residual_reference_ = 0.0;
   area_reference_px_ = 0.0;
 }
 
@@ -259,6 +260,7 @@ void Tracker::Initialize(const Rigid3d& world_from_obj) {
   bad_frames_ = 0;
   recent_correction_px_ = std::numeric_limits<double>::infinity();
   residual_reference_px_ = 0.0;
+  region_residual_reference_ = 0.0;
   area_reference_px_ = 0.0;
   region_.Reset();
   StartWithGivenModel();
@@ -763,6 +765,15 @@ TrackResult Tracker::Track(const Frame& input_frame) {
                                ? area_reference_px_ + f.residual_reference_rate *
                                                           (r.summary.object_px - area_reference_px_)
                                : r.summary.object_px;
+    }
+    const double region_residual = r.summary.region_residual;
+    if (r.summary.region_counts.used >= f.min_region_lines && region_residual > 0.0) {
+      if (region_residual_reference_ <= 0.0) {
+        region_residual_reference_ = region_residual;
+      } else if (region_residual < f.good_region_residual_ratio * region_residual_reference_) {
+        region_residual_reference_ +=
+            f.residual_reference_rate * (region_residual - region_residual_reference_);
+      }
     }
     if (residual_reference_px_ <= 0.0) {
       residual_reference_px_ = residual;

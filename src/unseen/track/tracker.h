@@ -262,6 +262,8 @@ class Tracker {
   std::unique_ptr<Reacquisition> reacquisition_;
   // Running mean of the residual of the confident frames (FailureOptions); 0 = none yet.
   double residual_reference_px_ = 0.0;
+  // Running mean of the region modality's residual in the confident frames; 0 = none yet.
+  double region_residual_reference_ = 0.0;
   // Running mean of the object's on-screen area in the confident frames, level-0 pixels; 0 = none.
   double area_reference_px_ = 0.0;
 };

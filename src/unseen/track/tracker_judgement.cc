@@ -56,6 +56,10 @@ double Tracker::ModalityConfidence(const SolveSummary& s) const {
   if (region_agreement >= 0.0 && s.region_counts.used >= f.min_region_lines) {
     region_term =
         Ramp(region_agreement, options_.region.bad_agreement, options_.region.good_agreement);
+    if (region_residual_reference_ > 0.0) {
+      region_term *= Ramp(s.region_residual / region_residual_reference_,
+                          f.bad_region_residual_ratio, f.good_region_residual_ratio);
+    }
   }
   const double depth_agreement = s.depth_counts.Agreement(options_.depth);
   if (depth_agreement < 0.0) {

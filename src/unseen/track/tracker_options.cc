@@ -50,6 +50,11 @@ void PyramidOptions::Check() const {
 void FailureOptions::Check() const {
   UNSEEN_CHECK(min_share >= 0.0 && good_share > min_share && good_share <= 1.0,
                "failure: need 0 <= min_share ({}) < good_share ({}) <= 1", min_share, good_share);
+  UNSEEN_CHECK(good_region_residual_ratio >= 1.0 &&
+                   bad_region_residual_ratio > good_region_residual_ratio &&
+                   std::isfinite(bad_region_residual_ratio),
+               "failure: need 1 <= good_region_residual_ratio ({}) < bad_region_residual_ratio "
+               "({})", good_region_residual_ratio, bad_region_residual_ratio);
   UNSEEN_CHECK(min_used_px >= 0.0 && good_used_px > min_used_px,
                "failure: need 0 <= min_used_px ({}) < good_used_px ({})", min_used_px,
                good_used_px);
@@ -297,6 +302,8 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"good_update_px", Field(&fa.good_update_px)},
         {"bad_update_px", Field(&fa.bad_update_px)},
         {"min_pixels", Field(&fa.min_pixels)},
+        {"good_region_residual_ratio", Field(&fa.good_region_residual_ratio)},
+        {"bad_region_residual_ratio", Field(&fa.bad_region_residual_ratio)},
         {"min_region_lines", Field(&fa.min_region_lines)},
         {"min_area_ratio", Field(&fa.min_area_ratio)},
         {"good_area_ratio", Field(&fa.good_area_ratio)},

@@ -120,6 +120,14 @@ struct FailureOptions {
   // The region modality's agreement (RegionModalityOptions) stands in for the photometric
   // terms above when it is higher and rests on at least this many correspondence lines.
   int min_region_lines = 20;
+  // The region modality's RMS contour offset (in its standard deviations) against the
+  // running mean of the confident frames' (at residual_reference_rate, kept while lost),
+  // ramped from [bad_region_residual_ratio, good_region_residual_ratio] to [0, 1], scales
+  // what the region modality vouches for: on a wrong pose the silhouette may agree with the
+  // learnt colours about as well (a same-coloured occluder) but sits far worse on its
+  // contour (2-4x the reference; confident frames stay within 2x).
+  double good_region_residual_ratio = 2.0;
+  double bad_region_residual_ratio = 3.0;
   // The object's rendered area against the running mean of the confident frames' (at
   // residual_reference_rate): a pose that shows the object far smaller or larger than it has
   // just been is doubtful whatever the modalities say (a solve can settle on a model shrunk
