@@ -118,12 +118,11 @@ TEST_F(AppearanceChange, ColoursThatNeverFittedComeFromTheFrames) {
 TEST(AppearanceChangeOptions, ParsedAndChecked) {
   const TrackerOptions o = ParseTrackerOptions(
       "photometric: {dragged_weight: 0.2, light_change_fit: 0.4, "
-      "light_change_correction_px: 2, light_change_max_gathering: 0.6}\n"
+      "light_change_max_gathering: 0.6}\n"
       "live_appearance: {poor_fit_share: 0.3, poor_fit_frames: 4, poor_fit_best_share: 0.5, "
       "poor_fit_confidence: 0.6}\n");
   EXPECT_EQ(o.photometric.dragged_weight, 0.2);
   EXPECT_EQ(o.photometric.light_change_fit, 0.4);
-  EXPECT_EQ(o.photometric.light_change_correction_px, 2.0);
   EXPECT_EQ(o.photometric.light_change_max_gathering, 0.6);
   EXPECT_EQ(o.live_appearance.poor_fit_share, 0.3);
   EXPECT_EQ(o.live_appearance.poor_fit_frames, 4);
@@ -131,7 +130,7 @@ TEST(AppearanceChangeOptions, ParsedAndChecked) {
   EXPECT_EQ(o.live_appearance.poor_fit_confidence, 0.6);
   EXPECT_THROW(ParseTrackerOptions("photometric: {dragged_weight: 1.5}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("photometric: {light_change_fit: -0.1}\n"), Error);
-  EXPECT_THROW(ParseTrackerOptions("photometric: {light_change_correction_px: .nan}\n"), Error);
+  EXPECT_THROW(ParseTrackerOptions("photometric: {light_change_max_gathering: .nan}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("live_appearance: {poor_fit_frames: -1}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("live_appearance: {poor_fit_best_share: 2}\n"), Error);
 }

@@ -84,12 +84,13 @@ bool Tracker::LightChanged(const SolveSummary& s, bool has_depth) const {
       model_ != given_model_) {
     return false;
   }
-  if (s.region_counts.used < options_.failure.min_region_lines ||
-      s.region_counts.Agreement() < ro.good_agreement) {
+  const FailureOptions& f = options_.failure;
+  if (s.region_counts.used < f.min_region_lines || s.region_counts.Agreement() < ro.good_agreement ||
+      (region_residual_reference_ > 0.0 &&
+       s.region_residual > f.good_region_residual_ratio * region_residual_reference_)) {
     return false;  // the silhouette does not vouch for the pose
   }
   return PhotometricFit(s) < po.light_change_fit &&
-         s.correction_px < po.light_change_correction_px &&
          s.counts.RejectionGathering() < po.light_change_max_gathering;
 }
 

@@ -147,9 +147,6 @@ void PhotometricOptions::Check() const {
                "photometric.dragged_weight {} must be in [0, 1]", dragged_weight);
   UNSEEN_CHECK(light_change_fit >= 0.0 && light_change_fit <= 1.0,
                "photometric.light_change_fit {} must be in [0, 1]", light_change_fit);
-  UNSEEN_CHECK(light_change_correction_px >= 0.0 && std::isfinite(light_change_correction_px),
-               "photometric.light_change_correction_px {} must be >= 0",
-               light_change_correction_px);
   UNSEEN_CHECK(light_change_max_gathering >= 0.0 && light_change_max_gathering <= 1.0,
                "photometric.light_change_max_gathering {} must be in [0, 1]",
                light_change_max_gathering);
@@ -228,7 +225,6 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"start_drag_ratio", Field(&ph.start_drag_ratio)},
         {"dragged_weight", Field(&ph.dragged_weight)},
         {"light_change_fit", Field(&ph.light_change_fit)},
-        {"light_change_correction_px", Field(&ph.light_change_correction_px)},
         {"light_change_max_gathering", Field(&ph.light_change_max_gathering)},
         {"weight", Field(&ph.weight)}}},
       {"preprocess",

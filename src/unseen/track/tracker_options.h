@@ -223,14 +223,14 @@ struct PhotometricOptions {
   double dragged_weight = 0.1;
   // Light that changes while tracking (a moving or pulsing lamp; frames without depth):
   // when a tracked frame's photometric fit falls below light_change_fit while the
-  // silhouette agrees with the image (RegionModalityOptions::good_agreement), the object is
-  // where it was predicted (the alignment moved it less than light_change_correction_px,
-  // level-0 pixels) and the rejected pixels are spread over the object rather than
-  // gathered in blocks (RejectionGathering below light_change_max_gathering: an occluder
-  // gathers them), the model's shading no longer matches the image: the photometric
-  // modality is demoted as above and the frame aligned again. 0: never.
+  // silhouette agrees with the image and sits on its contour (agreement of at least
+  // RegionModalityOptions::good_agreement, residual within
+  // FailureOptions::good_region_residual_ratio of the confident frames') and the rejected
+  // pixels are spread over the object rather than gathered in blocks (RejectionGathering
+  // below light_change_max_gathering: an occluder gathers them), the model's shading no
+  // longer matches the image: the photometric modality is demoted as above and the frame
+  // aligned again. 0: never.
   double light_change_fit = 0.5;
-  double light_change_correction_px = 1.5;
   double light_change_max_gathering = 0.5;
   double weight = 1.0;
   void Check() const;
