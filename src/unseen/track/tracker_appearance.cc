@@ -1,0 +1,81 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// Which appearance the tracker renders and how much it trusts it: the model's own colours
+// (the photometric modality in use, demoted or not), or colours taken from the confidently
+// tracked frames by projective texturing (LiveAppearanceOptions), and the switch to those
+// when the model's own colours never fitted the images.
+#include "unseen/track/tracker.h"
+
+#include <algorithm>
+
+#include "unseen/track/live_appearance.h"
+#include "unseen/util/logging.h"
+
+namespace unseen {
+
+void Tracker::StartWithGivenModel() {
+  const PhotometricOptions& po = options_.photometric;
+  const bool has_appearance = given_model_->HasAppearance();
+  use_photometric_ = po.enabled && (!po.require_appearance || has_appearance ||
+                                    !options_.region.enabled);
+  // A model without colours takes them from the frames the silhouette tracks (or every
+  // model, LiveAppearanceOptions::always).
+  const LiveAppearanceOptions& lo = options_.live_appearance;
+  live_appearance_ = po.enabled && lo.enabled && options_.region.enabled &&
+                     (!has_appearance || lo.always);
+  frames_since_capture_ = 0;
+  photometric_demoted_ = false;
+  dragged_at_start_ = false;
+  best_share_ = 0.0;
+  poor_fit_frames_ = 0;
+  model_ = given_model_;
+}
+
+bool Tracker::ColoursNeverFitted(const TrackResult& r) {
+  const LiveAppearanceOptions& lo = options_.live_appearance;
+  if (lo.poor_fit_frames <= 0 || live_appearance_ || !use_photometric_ || dragged_at_start_ ||
+      !options_.region.enabled || model_ != given_model_) {
+    return false;
+  }
+  if (r.status != TrackStatus::kTracking || r.confidence < lo.poor_fit_confidence ||
+      r.summary.search_candidates > 0) {
+    return false;
+  }
+  const double share = r.summary.share;
+  best_share_ = std::max(best_share_, share);
+  poor_fit_frames_ = share < lo.poor_fit_share ? poor_fit_frames_ + 1 : 0;
+  return poor_fit_frames_ >= lo.poor_fit_frames && best_share_ < lo.poor_fit_best_share;
+}
+
+void Tracker::UpdateLiveAppearance(const Frame& frame, const TrackResult& r) {
+  const LiveAppearanceOptions& lo = options_.live_appearance;
+  if (!live_appearance_ || r.status != TrackStatus::kTracking || r.confidence < lo.min_confidence) {
+    return;
+  }
+  if (model_ != given_model_ && ++frames_since_capture_ < lo.refresh_frames) return;
+  Mesh live = *given_model_;
+  live.projectors.clear();
+  const float tolerance_m = static_cast<float>(lo.occlusion_tolerance * sphere_radius_);
+  for (int c = 0; c < rig_.size(); ++c) {
+    if (frame.images[c].empty()) continue;
+    const PinholeCamera& camera = rig_.cameras[c].intrinsics;
+    const Rigid3d cam_from_obj = cam_from_world_[c] * r.world_from_obj;
+    const std::optional<PixelRect> rect = ObjectRect(camera, cam_from_obj);
+    if (!rect) continue;
+    std::optional<Projector> p = CaptureProjector(*given_model_, camera, cam_from_obj,
+                                                  frame.images[c], rect->Grow(lo.margin_px),
+                                                  tolerance_m);
+    if (p) live.projectors.push_back(std::move(*p));
+  }
+  if (live.projectors.empty()) return;
+  if (model_ == given_model_) {
+    UNSEEN_LOG_DEBUG("tracker: the model takes its colours from the tracked frames");
+    residual_reference_px_ = 0.0;  // the fit to the given colours says nothing of these
+  }
+  model_ = std::make_shared<const Mesh>(std::move(live));
+  use_photometric_ = true;
+  photometric_demoted_ = false;  // colours from the frames have a weight of their own
+  frames_since_capture_ = 0;
+}
+
+}  // namespace unseen
