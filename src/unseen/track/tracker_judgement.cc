@@ -57,8 +57,10 @@ double Tracker::ModalityConfidence(const SolveSummary& s) const {
     region_term =
         Ramp(region_agreement, options_.region.bad_agreement, options_.region.good_agreement);
     if (region_residual_reference_ > 0.0) {
-      region_term *= Ramp(s.region_residual / region_residual_reference_,
-                          f.bad_region_residual_ratio, f.good_region_residual_ratio);
+      const double reference =
+          std::max(region_residual_reference_, f.min_reference_region_residual);
+      region_term *= Ramp(s.region_residual / reference, f.bad_region_residual_ratio,
+                          f.good_region_residual_ratio);
     }
   }
   const double depth_agreement = s.depth_counts.Agreement(options_.depth);
@@ -87,7 +89,9 @@ bool Tracker::LightChanged(const SolveSummary& s, bool has_depth) const {
   const FailureOptions& f = options_.failure;
   if (s.region_counts.used < f.min_region_lines || s.region_counts.Agreement() < ro.good_agreement ||
       (region_residual_reference_ > 0.0 &&
-       s.region_residual > f.good_region_residual_ratio * region_residual_reference_)) {
+       s.region_residual > f.good_region_residual_ratio *
+                               std::max(region_residual_reference_,
+                                        f.min_reference_region_residual))) {
     return false;  // the silhouette does not vouch for the pose
   }
   return PhotometricFit(s) < po.light_change_fit &&

@@ -55,6 +55,9 @@ void FailureOptions::Check() const {
                    std::isfinite(bad_region_residual_ratio),
                "failure: need 1 <= good_region_residual_ratio ({}) < bad_region_residual_ratio "
                "({})", good_region_residual_ratio, bad_region_residual_ratio);
+  UNSEEN_CHECK(min_reference_region_residual >= 0.0 && std::isfinite(min_reference_region_residual),
+               "failure.min_reference_region_residual {} must be >= 0",
+               min_reference_region_residual);
   UNSEEN_CHECK(min_used_px >= 0.0 && good_used_px > min_used_px,
                "failure: need 0 <= min_used_px ({}) < good_used_px ({})", min_used_px,
                good_used_px);
@@ -300,6 +303,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"min_pixels", Field(&fa.min_pixels)},
         {"good_region_residual_ratio", Field(&fa.good_region_residual_ratio)},
         {"bad_region_residual_ratio", Field(&fa.bad_region_residual_ratio)},
+        {"min_reference_region_residual", Field(&fa.min_reference_region_residual)},
         {"min_region_lines", Field(&fa.min_region_lines)},
         {"min_area_ratio", Field(&fa.min_area_ratio)},
         {"good_area_ratio", Field(&fa.good_area_ratio)},

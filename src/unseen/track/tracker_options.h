@@ -128,6 +128,9 @@ struct FailureOptions {
   // contour (2-4x the reference; confident frames stay within 2x).
   double good_region_residual_ratio = 2.0;
   double bad_region_residual_ratio = 3.0;
+  // Floor of that running mean, standard deviations: below it the contour sits within its
+  // own noise, where a doubling means nothing (renders without noise, sharp contours).
+  double min_reference_region_residual = 1.0;
   // The object's rendered area against the running mean of the confident frames' (at
   // residual_reference_rate): a pose that shows the object far smaller or larger than it has
   // just been is doubtful whatever the modalities say (a solve can settle on a model shrunk
