@@ -50,19 +50,19 @@ class FlatPatchSimplifier {
     triangles_ = mesh.triangles;
     alive_.assign(triangles_.size(), 1);
     incident_.assign(num_positions_, {});
-    for (int t = 0; t < static_cast<int>(triangles_.size()); ++t) {
-      const Eigen::Vector3d n = Normal(triangles_[t]);
-      if (n.squaredNorm() == 0.0) continue;  // degenerate: never collapsed through
-      for (int k = 0; k < 3; ++k) incident_[position_of_[triangles_[t][k]]].push_back(t);
-    }
-    for (int t = 0; t < static_cast<int>(triangles_.size()); ++t) {
-      if (Normal(triangles_[t]).squaredNorm() == 0.0) degenerate_.push_back(t);
-    }
-    // A degenerate triangle pins its vertices (it is drawn as nothing, but collapses around
-    // it would have to keep it consistent).
+    // A degenerate triangle is never collapsed through and pins its vertices (it is drawn
+    // as nothing, but collapses around it would have to keep it consistent).
     pinned_.assign(num_positions_, 0);
-    for (int t : degenerate_) {
-      for (int k = 0; k < 3; ++k) pinned_[position_of_[triangles_[t][k]]] = 1;
+    for (int t = 0; t < static_cast<int>(triangles_.size()); ++t) {
+      const bool degenerate = Normal(triangles_[t]).squaredNorm() == 0.0;
+      for (int k = 0; k < 3; ++k) {
+        const int p = position_of_[triangles_[t][k]];
+        if (degenerate) {
+          pinned_[p] = 1;
+        } else {
+          incident_[p].push_back(t);
+        }
+      }
     }
   }
 
@@ -349,7 +349,6 @@ class FlatPatchSimplifier {
   std::vector<Eigen::Vector3i> triangles_;
   std::vector<uint8_t> alive_;
   std::vector<std::vector<int>> incident_;  // per position
-  std::vector<int> degenerate_;
   std::vector<uint8_t> pinned_;  // per position
 };
 

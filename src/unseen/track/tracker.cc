@@ -701,20 +701,18 @@ TrackResult Tracker::Track(const Frame& input_frame) {
                                                           (r.summary.object_px - area_reference_px_)
                                : r.summary.object_px;
     }
-    const double region_residual = r.summary.region_residual;
-    if (r.summary.region_counts.used >= f.min_region_lines && region_residual > 0.0) {
-      if (region_residual_reference_ <= 0.0) {
-        region_residual_reference_ = region_residual;
-      } else if (region_residual < f.good_region_residual_ratio * region_residual_reference_) {
-        region_residual_reference_ +=
-            f.residual_reference_rate * (region_residual - region_residual_reference_);
+    // Each residual's reference follows the frames that fit about as well as it.
+    auto follow = [&](double value, double good_ratio, double* reference) {
+      if (*reference <= 0.0) {
+        *reference = value;
+      } else if (value < good_ratio * *reference) {
+        *reference += f.residual_reference_rate * (value - *reference);
       }
+    };
+    if (r.summary.region_counts.used >= f.min_region_lines && r.summary.region_residual > 0.0) {
+      follow(r.summary.region_residual, f.good_region_residual_ratio, &region_residual_reference_);
     }
-    if (residual_reference_px_ <= 0.0) {
-      residual_reference_px_ = residual;
-    } else if (residual < f.good_residual_ratio * residual_reference_px_) {
-      residual_reference_px_ += f.residual_reference_rate * (residual - residual_reference_px_);
-    }
+    follow(residual, f.good_residual_ratio, &residual_reference_px_);
   }
   // The colour statistics learn from frames tracked with confidence by a plain alignment
   // (a search's result may come from another candidate than the last one aligned).

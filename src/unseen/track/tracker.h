@@ -170,6 +170,9 @@ class Tracker {
   // The photometric modality's own judgement of the alignment in [0, 1] (FailureOptions:
   // support, residual, convergence), whatever the other modalities say.
   double PhotometricFit(const SolveSummary& summary) const;
+  // The region modality's residual over the running mean of the confident frames' (with
+  // FailureOptions::min_reference_region_residual as its floor); 0 before any.
+  double RegionResidualRatio(const SolveSummary& summary) const;
   // Whether the photometric fit judges the frames (in use and not demoted).
   bool PhotometricJudges() const { return use_photometric_ && !photometric_demoted_; }
   // Whether a tracked frame's alignment shows the light changed under the model's own

@@ -57,9 +57,7 @@ double Tracker::ModalityConfidence(const SolveSummary& s) const {
     region_term =
         Ramp(region_agreement, options_.region.bad_agreement, options_.region.good_agreement);
     if (region_residual_reference_ > 0.0) {
-      const double reference =
-          std::max(region_residual_reference_, f.min_reference_region_residual);
-      region_term *= Ramp(s.region_residual / reference, f.bad_region_residual_ratio,
+      region_term *= Ramp(RegionResidualRatio(s), f.bad_region_residual_ratio,
                           f.good_region_residual_ratio);
     }
   }
@@ -77,6 +75,12 @@ double Tracker::ModalityConfidence(const SolveSummary& s) const {
   return depth_term * (image_judges ? std::max(photometric, region_term) : 1.0);
 }
 
+double Tracker::RegionResidualRatio(const SolveSummary& s) const {
+  if (region_residual_reference_ <= 0.0) return 0.0;
+  return s.region_residual /
+         std::max(region_residual_reference_, options_.failure.min_reference_region_residual);
+}
+
 bool Tracker::LightChanged(const SolveSummary& s, bool has_depth) const {
   const PhotometricOptions& po = options_.photometric;
   const RegionModalityOptions& ro = options_.region;
@@ -88,10 +92,7 @@ bool Tracker::LightChanged(const SolveSummary& s, bool has_depth) const {
   }
   const FailureOptions& f = options_.failure;
   if (s.region_counts.used < f.min_region_lines || s.region_counts.Agreement() < ro.good_agreement ||
-      (region_residual_reference_ > 0.0 &&
-       s.region_residual > f.good_region_residual_ratio *
-                               std::max(region_residual_reference_,
-                                        f.min_reference_region_residual))) {
+      RegionResidualRatio(s) > f.good_region_residual_ratio) {
     return false;  // the silhouette does not vouch for the pose
   }
   return PhotometricFit(s) < po.light_change_fit &&
