@@ -1,0 +1,277 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// The rasterizer's resolve pass, internal to render/: texture sampling and the per-triangle
+// colour and normal of the visible surface (texture, projective texture, vertex colours
+// or the material's diffuse colour). Written by hand because it runs once per rendered
+// sample in the tracker's inner loop: per-triangle state is prepared once per run of
+// samples of a triangle, texel fetches are four-float loads.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
+#include "unseen/mesh/mesh.h"
+
+namespace unseen::render_internal {
+
+// Read-only view of a CV_32FC3 image.
+struct TextureView {
+  const float* data = nullptr;
+  int width = 0, height = 0;
+  float width_f = 0.0f, height_f = 0.0f;
+  size_t step = 0;  // floats per row
+  explicit TextureView(const cv::Mat& m = cv::Mat()) {
+    if (m.empty()) return;
+    data = m.ptr<float>();
+    width = m.cols;
+    height = m.rows;
+    width_f = static_cast<float>(width);
+    height_f = static_cast<float>(height);
+    step = m.step1();
+  }
+};
+
+[[gnu::always_inline]] inline void Lerp4(const float* p00, const float* p01, const float* p10, const float* p11,
+                  float ax, float ay, float* __restrict out, bool may_read_one_more) {
+#if defined(__SSE2__)
+  if (may_read_one_more) {  // four-float loads read one float past the texel
+    const __m128 a = _mm_loadu_ps(p00), b = _mm_loadu_ps(p01);
+    const __m128 c = _mm_loadu_ps(p10), d = _mm_loadu_ps(p11);
+    const __m128 vax = _mm_set1_ps(ax);
+    const __m128 top = _mm_add_ps(a, _mm_mul_ps(vax, _mm_sub_ps(b, a)));
+    const __m128 bottom = _mm_add_ps(c, _mm_mul_ps(vax, _mm_sub_ps(d, c)));
+    const __m128 r = _mm_add_ps(top, _mm_mul_ps(_mm_set1_ps(ay), _mm_sub_ps(bottom, top)));
+    _mm_storel_pi(reinterpret_cast<__m64*>(out), r);
+    _mm_store_ss(out + 2, _mm_movehl_ps(r, r));
+    return;
+  }
+#endif
+  const float t0 = p00[0] + ax * (p01[0] - p00[0]), b0 = p10[0] + ax * (p11[0] - p10[0]);
+  const float t1 = p00[1] + ax * (p01[1] - p00[1]), b1 = p10[1] + ax * (p11[1] - p10[1]);
+  const float t2 = p00[2] + ax * (p01[2] - p00[2]), b2 = p10[2] + ax * (p11[2] - p10[2]);
+  out[0] = t0 + ay * (b0 - t0);
+  out[1] = t1 + ay * (b1 - t1);
+  out[2] = t2 + ay * (b2 - t2);
+}
+
+// Index of texel column x wrapped into [0, n).
+inline int Wrap(int x, int n) {
+  if (static_cast<unsigned>(x) < static_cast<unsigned>(n)) return x;
+  x %= n;
+  return x < 0 ? x + n : x;
+}
+
+// Bilinear sample at OBJ texture coordinates (v up), repeating.
+[[gnu::always_inline]] inline void SampleWrap(const TextureView& t, float u, float v,
+                                              float* __restrict bgr) {
+  float fx = u * t.width_f - 0.5f, fy = (1.0f - v) * t.height_f - 0.5f;
+  if (!(std::abs(fx) < 1e8f)) fx = 0.0f;  // NaN or absurd uv
+  if (!(std::abs(fy) < 1e8f)) fy = 0.0f;
+  const float flx = std::floor(fx), fly = std::floor(fy);
+  const int x0 = Wrap(static_cast<int>(flx), t.width);
+  const int y0 = Wrap(static_cast<int>(fly), t.height);
+  const int x1 = x0 + 1 == t.width ? 0 : x0 + 1;
+  const int y1 = y0 + 1 == t.height ? 0 : y0 + 1;
+  const float* r0 = t.data + y0 * t.step;
+  const float* r1 = t.data + y1 * t.step;
+  // Every row but the last has at least one more float after each texel.
+  const bool safe = y0 + 1 < t.height && y1 + 1 < t.height;
+  Lerp4(r0 + 3 * x0, r0 + 3 * x1, r1 + 3 * x0, r1 + 3 * x1, fx - flx, fy - fly, bgr, safe);
+}
+
+// Bilinear sample at a pixel position (pixel-centre convention), clamped to the image.
+inline void SampleClamp(const TextureView& t, float x, float y, float* __restrict bgr) {
+  x = std::clamp(x, 0.0f, static_cast<float>(t.width - 1));
+  y = std::clamp(y, 0.0f, static_cast<float>(t.height - 1));
+  const int x0 = std::min(static_cast<int>(x), t.width - 1);
+  const int y0 = std::min(static_cast<int>(y), t.height - 1);
+  const int x1 = std::min(x0 + 1, t.width - 1), y1 = std::min(y0 + 1, t.height - 1);
+  const float* r0 = t.data + y0 * t.step;
+  const float* r1 = t.data + y1 * t.step;
+  const bool safe = y1 + 1 < t.height;
+  Lerp4(r0 + 3 * x0, r0 + 3 * x1, r1 + 3 * x0, r1 + 3 * x1, x - x0, y - y0, bgr, safe);
+}
+
+struct ProjectorView {
+  Eigen::Matrix3f rotation;
+  Eigen::Vector3f translation;
+  float fx, fy, cx, cy;
+  float max_x, max_y;  // width - 0.5, height - 0.5
+  TextureView image;
+  const cv::Mat* depth = nullptr;  // the projector's surface z, or null
+  float depth_tolerance_m = 0.0f;
+};
+
+// Colour and normal of surface points given by their barycentric coordinates (b1, b2) in
+// a mesh triangle. Per-triangle data is prepared once per run of pixels of a triangle.
+class Shader {
+ public:
+  // `textures`: the image (mip-map level) to sample for each material.
+  Shader(const Mesh& mesh, const std::vector<cv::Mat>& textures) : mesh_(mesh) {
+    textures_.reserve(textures.size());
+    for (const cv::Mat& t : textures) textures_.emplace_back(t);
+    for (const Projector& p : mesh.projectors) {
+      ProjectorView v;
+      v.rotation = p.cam_from_obj.RotationMatrix().cast<float>();
+      v.translation = p.cam_from_obj.translation().cast<float>();
+      v.fx = float(p.camera.fx);
+      v.fy = float(p.camera.fy);
+      v.cx = float(p.camera.cx);
+      v.cy = float(p.camera.cy);
+      v.max_x = p.image.cols - 0.5f;
+      v.max_y = p.image.rows - 0.5f;
+      v.image = TextureView(p.image);
+      if (!p.depth.empty()) v.depth = &p.depth;
+      v.depth_tolerance_m = p.depth_tolerance_m;
+      projectors_.push_back(v);
+    }
+    projector_triangles_.resize(projectors_.size());
+  }
+
+  const TextureView* textures() const { return textures_.data(); }
+
+  // Writes the BGR colour of the point (b1, b2) of triangle `tri` to `bgr`.
+  void Color(int tri, float b1, float b2, float* bgr) {
+    if (tri != color_tri_) PrepareColor(tri);
+    if (kind_ == Kind::kProjective && ProjectiveColor(b1, b2, bgr)) return;
+    if (fallback_kind_ == Kind::kTexture) {
+      SampleWrap(*texture_, uv0_.x() + b1 * duv1_.x() + b2 * duv2_.x(),
+                 uv0_.y() + b1 * duv1_.y() + b2 * duv2_.y(), bgr);
+      return;
+    }
+    for (int k = 0; k < 3; ++k) bgr[k] = c0_[k] + b1 * dc1_[k] + b2 * dc2_[k];
+  }
+
+  // Unit normal in the object frame.
+  Eigen::Vector3f Normal(int tri, float b1, float b2) {
+    if (tri != normal_tri_) {
+      normal_tri_ = tri;
+      const Eigen::Vector3i& t = mesh_.triangles[tri];
+      if (!mesh_.normals.empty()) {
+        n0_ = mesh_.normals[t[0]];
+        dn1_ = mesh_.normals[t[1]] - n0_;
+        dn2_ = mesh_.normals[t[2]] - n0_;
+      } else {
+        const Eigen::Vector3f& v0 = mesh_.vertices[t[0]];
+        n0_ = (mesh_.vertices[t[1]] - v0).cross(mesh_.vertices[t[2]] - v0);
+        dn1_.setZero();
+        dn2_.setZero();
+      }
+    }
+    const Eigen::Vector3f n = n0_ + b1 * dn1_ + b2 * dn2_;
+    const float len = n.norm();
+    return len > 0.0f ? Eigen::Vector3f(n / len) : Eigen::Vector3f::Zero();
+  }
+
+ private:
+  enum class Kind { kTexture, kProjective, kVertexColor, kConstant };
+
+  void PrepareColor(int tri) {
+    color_tri_ = tri;
+    const Eigen::Vector3i& t = mesh_.triangles[tri];
+    const int m = mesh_.triangle_materials.empty() ? (mesh_.materials.empty() ? -1 : 0)
+                                                   : mesh_.triangle_materials[tri];
+    // The colour without projectors: texture, vertex colours, diffuse, white.
+    if (m >= 0 && textures_[m].data != nullptr && !mesh_.uvs.empty()) {
+      kind_ = Kind::kTexture;
+      texture_ = &textures_[m];
+      uv0_ = mesh_.uvs[t[0]];
+      duv1_ = mesh_.uvs[t[1]] - uv0_;
+      duv2_ = mesh_.uvs[t[2]] - uv0_;
+    } else if (!mesh_.colors_bgr.empty()) {
+      kind_ = Kind::kVertexColor;
+      c0_ = mesh_.colors_bgr[t[0]];
+      dc1_ = mesh_.colors_bgr[t[1]] - c0_;
+      dc2_ = mesh_.colors_bgr[t[2]] - c0_;
+    } else {
+      kind_ = Kind::kConstant;
+      c0_ = m >= 0 ? mesh_.materials[m].diffuse_bgr : Eigen::Vector3f::Ones();
+      dc1_.setZero();
+      dc2_.setZero();
+    }
+    if (!projectors_.empty()) {
+      fallback_kind_ = kind_;
+      kind_ = Kind::kProjective;
+      // The point of barycentric (b1, b2) in each projector's frame is affine in them:
+      // q = q0 + b1 dq1 + b2 dq2, prepared once per triangle.
+      const Eigen::Vector3f p0 = mesh_.vertices[t[0]];
+      const Eigen::Vector3f dp1 = mesh_.vertices[t[1]] - p0;
+      const Eigen::Vector3f dp2 = mesh_.vertices[t[2]] - p0;
+      const Eigen::Vector3f face_normal = dp1.cross(dp2);
+      for (size_t k = 0; k < projectors_.size(); ++k) {
+        const ProjectorView& v = projectors_[k];
+        ProjectorTriangle& pt = projector_triangles_[k];
+        pt.q0 = v.rotation * p0 + v.translation;
+        pt.dq1 = v.rotation * dp1;
+        pt.dq2 = v.rotation * dp2;
+        pt.normal = v.rotation * face_normal;
+      }
+    } else {
+      fallback_kind_ = kind_;
+    }
+  }
+
+  bool ProjectiveColor(float b1, float b2, float* bgr) const {
+    int best = -1;
+    float best_score = 0.0f, best_x = 0.0f, best_y = 0.0f;
+    const bool several = projectors_.size() > 1;
+    for (size_t k = 0; k < projectors_.size(); ++k) {
+      const ProjectorView& v = projectors_[k];
+      const ProjectorTriangle& pt = projector_triangles_[k];
+      const Eigen::Vector3f q = pt.q0 + b1 * pt.dq1 + b2 * pt.dq2;
+      if (!(q.z() > 0.0f)) continue;
+      const float inv_z = 1.0f / q.z();
+      const float x = v.fx * q.x() * inv_z + v.cx, y = v.fy * q.y() * inv_z + v.cy;
+      if (!(x >= -0.5f && y >= -0.5f && x < v.max_x && y < v.max_y)) continue;
+      if (v.depth) {
+        // Hidden from the projector: behind the surface it saw there, or it saw none.
+        // (x, y >= -0.5: adding a half and truncating rounds to the nearest pixel.)
+        const int px = std::min(static_cast<int>(x + 0.5f), v.depth->cols - 1);
+        const int py = std::min(static_cast<int>(y + 0.5f), v.depth->rows - 1);
+        const float seen = v.depth->ptr<float>(py)[px];
+        if (!(seen > 0.0f) || q.z() > seen + v.depth_tolerance_m) continue;
+      }
+      // Cosine (times |n|) between the normal and the direction to the projector: the
+      // surface must face it; a single projector needs no comparison.
+      const float facing = -pt.normal.dot(q);
+      if (!(facing > 0.0f)) continue;
+      const float score = several ? facing / q.norm() : 1.0f;
+      if (score > best_score) {
+        best = static_cast<int>(k);
+        best_score = score;
+        best_x = x;
+        best_y = y;
+      }
+    }
+    if (best < 0) return false;
+    SampleClamp(projectors_[best].image, best_x, best_y, bgr);
+    return true;
+  }
+
+  const Mesh& mesh_;
+  std::vector<TextureView> textures_;
+  std::vector<ProjectorView> projectors_;
+  // The triangle prepared for Color().
+  int color_tri_ = -1;
+  Kind kind_ = Kind::kConstant, fallback_kind_ = Kind::kConstant;
+  const TextureView* texture_ = nullptr;
+  Eigen::Vector2f uv0_ = Eigen::Vector2f::Zero(), duv1_ = uv0_, duv2_ = uv0_;
+  Eigen::Vector3f c0_ = Eigen::Vector3f::Zero(), dc1_ = c0_, dc2_ = c0_;
+  // Per projector, the prepared triangle in its frame.
+  struct ProjectorTriangle {
+    Eigen::Vector3f q0, dq1, dq2, normal;
+  };
+  std::vector<ProjectorTriangle> projector_triangles_;
+  // The triangle prepared for Normal().
+  int normal_tri_ = -1;
+  Eigen::Vector3f n0_ = Eigen::Vector3f::Zero(), dn1_ = n0_, dn2_ = n0_;
+};
+
+}  // namespace unseen::render_internal
