@@ -58,7 +58,7 @@ TEST(TrackerOptions, ParsesTheReacquisitionSection) {
   const TrackerOptions o = ParseTrackerOptions(
       "reacquisition: {use_correlation: false, seed_object_px: 32, search_radii: 6,\n"
       "  min_correlation: 0.4, max_seeds: 3, rotation_deg: 20, max_candidates: 10,\n"
-      "  score_levels: 2, refine_candidates: 1, min_score: 0.1, seed_when_doubtful: false,\n"
+      "  score_levels: 2, refine_candidates: 3, min_score: 0.1, seed_when_doubtful: false,\n"
       "  doubtful_confidence: 0.4, min_seed_shift_px: 2}\n");
   const ReacquisitionOptions& r = o.reacquisition;
   EXPECT_FALSE(r.use_correlation);
@@ -69,7 +69,7 @@ TEST(TrackerOptions, ParsesTheReacquisitionSection) {
   EXPECT_DOUBLE_EQ(r.rotation_deg, 20.0);
   EXPECT_EQ(r.max_candidates, 10);
   EXPECT_EQ(r.score_levels, 2);
-  EXPECT_EQ(r.refine_candidates, 1);
+  EXPECT_EQ(r.refine_candidates, 3);
   EXPECT_DOUBLE_EQ(r.min_score, 0.1);
   EXPECT_FALSE(r.seed_when_doubtful);
   EXPECT_DOUBLE_EQ(r.doubtful_confidence, 0.4);
