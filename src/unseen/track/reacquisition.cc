@@ -394,7 +394,9 @@ Tracker& Reacquisition::CoarseTracker(int level) {
     TrackerOptions o = tracker_.options();
     o.preprocess.linf_sigma_px = o.preprocess.LinfSigmaAtLevel(level);
     o.preprocess.shading_sigma_px = o.preprocess.ShadingSigmaAtLevel(level);
-    o.pyramid.max_iterations_per_level = o.pyramid.coarse_max_iterations;
+    o.pyramid.max_iterations_per_level =
+        std::min(o.pyramid.coarse_max_iterations, o.reacquisition.score_iterations);
+    o.pyramid.coarse_max_iterations = o.pyramid.max_iterations_per_level;
     o.pyramid.min_update_px = o.pyramid.coarse_min_update_px;
     o.pyramid.supersampled_levels = std::max(0, o.pyramid.supersampled_levels - level);
     o.failure.search_when_lost = false;
@@ -440,11 +442,11 @@ TrackResult Reacquisition::ScoreCoarse(const std::vector<cv::Mat>& images,
 }
 
 TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
-                                  TrackResult first) {
+                                  const Rigid3d& coasted) {
   const std::vector<cv::Mat>& images = frame.images;
   const TrackerOptions& options = tracker_.options();
   const ReacquisitionOptions& o = options.reacquisition;
-  StageTimes times = first.summary.times;
+  StageTimes times;
   Timer timer;
   std::vector<CorrelationSeed> seeds;
   if (o.use_correlation) {
@@ -463,8 +465,13 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
     UNSEEN_LOG_DEBUG("correlation seed: shift {:.1f} px at level {}, ncc {:.2f}: {}",
                      seed.max_shift_px, seed.level, seed.score, seed.world_from_obj.ToString());
   }
-  const std::vector<Rigid3d> candidates = ReacquisitionCandidates(
-      last_good, seeds, sphere_centre_, options.failure.search_offset * sphere_radius_, o);
+  // The coasted pose first: an object that comes out from behind an occluder is most
+  // likely where it went on moving.
+  std::vector<Rigid3d> candidates{coasted};
+  for (const Rigid3d& p : ReacquisitionCandidates(
+           last_good, seeds, sphere_centre_, options.failure.search_offset * sphere_radius_, o)) {
+    candidates.push_back(p);
+  }
 
   // Score every candidate at the coarse levels (the full pyramid when it has no more).
   const int levels = tracker_.NumLevelsFor(last_good);
@@ -476,23 +483,48 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
     int order;
   };
   std::vector<Scored> scored;
-  TrackResult best = std::move(first);
-  for (const Rigid3d& candidate : candidates) {
-    TrackResult c = AlignCoarse(level_images, finest, levels - finest, candidate);
+  TrackResult best;  // nothing found yet
+  best.world_from_obj = coasted;
+  int choice = -1;  // the candidate `best` came from
+  for (int i = 0; i < static_cast<int>(candidates.size()); ++i) {
+    TrackResult c = AlignCoarse(level_images, finest, levels - finest, candidates[i]);
     times += c.summary.times;
     if (!c.world_from_obj.IsValid()) continue;
     if (finest == 0) {  // already aligned at full resolution
-      if (c.confidence > best.confidence) best = std::move(c);
+      if (c.confidence > best.confidence) {
+        best = std::move(c);
+        choice = i;
+      }
       continue;
     }
-    UNSEEN_LOG_DEBUG("candidate {}: coarse conf {:.2f} at {}", scored.size(), c.confidence,
+    UNSEEN_LOG_DEBUG("candidate {}: coarse conf {:.2f} at {}", i, c.confidence,
                      c.world_from_obj.ToString());
-    scored.push_back({c.confidence, c.world_from_obj, static_cast<int>(scored.size())});
+    scored.push_back({c.confidence, c.world_from_obj, i});
   }
   auto by_score = [](const Scored& a, const Scored& b) {
     return a.score != b.score ? a.score > b.score : a.order < b.order;
   };
   std::sort(scored.begin(), scored.end(), by_score);
+  // Successive halving in rounds at the scoring level: each candidate had score_iterations
+  // rounds; the better half, at least refine_candidates, as many more from where they
+  // stopped, and so on up to the coarse levels' own limit. A candidate that needs a long
+  // way (a turn the candidates missed) is continued while it looks promising; the hopeless
+  // stop early.
+  const int round_limit = std::max(options.pyramid.coarse_max_iterations, o.score_iterations);
+  for (int rounds = o.score_iterations; rounds + o.score_iterations <= round_limit;
+       rounds += o.score_iterations) {
+    const int keep = std::max(o.refine_candidates, (static_cast<int>(scored.size()) + 1) / 2);
+    if (keep >= static_cast<int>(scored.size()) && rounds > o.score_iterations) break;
+    if (keep < static_cast<int>(scored.size())) scored.resize(keep);
+    for (Scored& c : scored) {
+      TrackResult r = AlignCoarse(level_images, finest, levels - finest, c.pose);
+      times += r.summary.times;
+      if (!r.world_from_obj.IsValid()) continue;
+      c.score = r.confidence;
+      c.pose = r.world_from_obj;
+    }
+    std::sort(scored.begin(), scored.end(), by_score);
+  }
   // Successive halving down the pyramid: at each finer level (but the finest) a quarter of
   // the survivors, at least refine_candidates, continue from where they converged; the
   // finer level tells orientations apart that the coarse silhouette does not.
@@ -521,10 +553,14 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
     times += r.summary.times;
     UNSEEN_LOG_DEBUG("refined candidate {}: conf {:.2f} at {}", scored[k].order, r.confidence,
                      r.world_from_obj.ToString());
-    if (r.confidence > best.confidence) best = std::move(r);
+    if (r.confidence > best.confidence) {
+      best = std::move(r);
+      choice = scored[k].order;
+    }
   }
   best.summary.times = times;
-  best.summary.search_candidates = 1 + static_cast<int>(candidates.size());
+  best.summary.search_candidates = static_cast<int>(candidates.size());
+  best.summary.search_choice = choice;
   return best;
 }
 

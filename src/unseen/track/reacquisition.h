@@ -106,12 +106,13 @@ class Reacquisition {
 
   // `frame` is checked (Tracker::CheckFrame); its depth, if any, serves the full-resolution
   // alignments.
-  // While lost: `first` is the full alignment from `last_good`. Correlates `last_good`
-  // and its turns, scores the candidates at the coarse levels (successive halving down to
-  // level 1), aligns the best options.refine_candidates at full resolution (stopping once
-  // one reaches failure.recover_confidence) and returns the most confident of everything
-  // aligned at full resolution (summary.search_candidates = poses tried, times summed).
-  TrackResult Search(const Frame& frame, const Rigid3d& last_good, TrackResult first);
+  // While lost: correlates `last_good` and its turns, scores `coasted` (where the motion
+  // model carries the object) and the candidates around `last_good` at the coarse levels
+  // (successive halving down to level 1), aligns the best options.refine_candidates at
+  // full resolution (stopping once one reaches failure.recover_confidence) and returns the
+  // most confident of them (confidence 0 at `coasted` when none was refined;
+  // summary.search_candidates = poses tried, times summed).
+  TrackResult Search(const Frame& frame, const Rigid3d& last_good, const Rigid3d& coasted);
   // While tracking, for a doubtful frame: `first` is the full alignment from `predicted`.
   // Aligns from the correlation seed around `predicted` when it moves the object, and
   // returns that alignment when it is at least failure.recover_confidence and more

@@ -55,7 +55,9 @@ std::string SolveSummary::BriefReport() const {
       counts.rejected_undirected, counts.rejected_normal_flow, counts.rejected_block, counts.used,
       share, counts.BlockShare(),
       initial_residual_px, final_residual_px, last_update_px, correction_px,
-      search_candidates ? fmt::format(", searched {}", search_candidates) : std::string(),
+      search_candidates
+          ? fmt::format(", searched {} chose {}", search_candidates, search_choice)
+          : std::string(),
       depth_counts.sampled
           ? fmt::format(" | depth used {} agree {}/{} hidden {} res {:.1f} mm", depth_counts.used,
                         depth_counts.agreeing, depth_counts.measured, depth_counts.hidden,
@@ -638,9 +640,16 @@ TrackResult Tracker::Track(const Frame& input_frame) {
                                 : predictor_->Predict(options_.frame_interval_s);
   const double predict_ms = timer.ElapsedMilliseconds();
 
-  TrackResult r = learn_from_start_ ? AlignFirstFrame(frame, predicted)
-                                    : AlignPredicted(frame, predicted);
-  if (!learn_from_start_ && status_ == TrackStatus::kTracking &&
+  const bool search = status_ == TrackStatus::kLost && f.search_when_lost;
+  TrackResult r;
+  if (search) {
+    // Re-acquisition (3.9): the coasted pose, correlation seeds, translations and rotations
+    // around the last good pose, scored at the coarse levels, the best refined.
+    r = Reacquirer().Search(frame, last_good_, predicted);
+  } else {
+    r = learn_from_start_ ? AlignFirstFrame(frame, predicted) : AlignPredicted(frame, predicted);
+  }
+  if (!search && !learn_from_start_ && status_ == TrackStatus::kTracking &&
       LightChanged(r.summary, !frame.depths.empty())) {
     // The model's shading no longer matches the image: the silhouette leads from now on.
     UNSEEN_LOG_INFO("tracker: frame {}: the light changed under the model's colours "
@@ -653,12 +662,8 @@ TrackResult Tracker::Track(const Frame& input_frame) {
     r.summary.times += first_times;
   }
   learn_from_start_ = false;
-  if (status_ == TrackStatus::kLost && f.search_when_lost && r.confidence < f.recover_confidence) {
-    // Re-acquisition (3.9): correlation seeds, translations and rotations around the last
-    // good pose, scored at the coarse levels, the best refined.
-    r = Reacquirer().Search(frame, last_good_, std::move(r));
-  } else if (status_ == TrackStatus::kTracking && options_.reacquisition.seed_when_doubtful &&
-             r.confidence < options_.reacquisition.doubtful_confidence) {
+  if (status_ == TrackStatus::kTracking && options_.reacquisition.seed_when_doubtful &&
+      r.confidence < options_.reacquisition.doubtful_confidence) {
     // A doubtful frame may have moved beyond the pyramid's capture range: try the
     // correlation seed before judging it. The motion model did not bring the object
     // where the seed found it: it restarts there rather than learning the jump.

@@ -73,6 +73,7 @@ struct SolveSummary {
   double region_residual = 0.0;
   RegionCounts start_region_counts;  // the region modality's first round, at the start pose
   int search_candidates = 0;             // poses tried by the re-acquisition search
+  int search_choice = -1;  // the one it returned (0: where the motion model coasted), -1: none
   StageTimes times;
   // One line: levels, iterations, pixels used/rejected, residual, ms.
   std::string BriefReport() const;

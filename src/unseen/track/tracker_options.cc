@@ -108,6 +108,8 @@ void ReacquisitionOptions::Check() const {
                "reacquisition.rotation_deg {} must be in [0, 90]", rotation_deg);
   UNSEEN_CHECK(max_candidates >= 0 && max_candidates <= 100,
                "reacquisition.max_candidates {} must be in [0, 100]", max_candidates);
+  UNSEEN_CHECK(score_iterations >= 1 && score_iterations <= 100,
+               "reacquisition.score_iterations {} must be in [1, 100]", score_iterations);
   UNSEEN_CHECK(score_levels >= 1 && score_levels <= 8,
                "reacquisition.score_levels {} must be in [1, 8]", score_levels);
   UNSEEN_CHECK(refine_candidates >= 0 && refine_candidates <= 100,
@@ -322,6 +324,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"max_seeds", Field(&re.max_seeds)},
         {"rotation_deg", Field(&re.rotation_deg)},
         {"max_candidates", Field(&re.max_candidates)},
+        {"score_iterations", Field(&re.score_iterations)},
         {"score_levels", Field(&re.score_levels)},
         {"refine_candidates", Field(&re.refine_candidates)},
         {"min_score", Field(&re.min_score)},
