@@ -403,11 +403,12 @@ Tracker& Reacquisition::CoarseTracker(int level) {
     o.reacquisition.use_correlation = false;
     o.reacquisition.seed_when_doubtful = false;
     o.threads = 1;  // small images; no pool of its own
-    // The colour statistics are the tracker's, learnt from tracked frames; a clone would
-    // learn them from its candidates.
-    o.region.enabled = false;
     slot = std::make_unique<Tracker>(rig, tracker_.model(), o);
   }
+  // The silhouette judges with the colour statistics the tracker learnt from its tracked
+  // frames (an aligner only reads them: they are learnt in Track), so that a model whose
+  // colours do not judge (untextured, or demoted) can be scored at all.
+  slot->set_region_statistics(tracker_.region_statistics());
   return *slot;
 }
 

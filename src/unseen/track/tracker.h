@@ -137,6 +137,16 @@ class Tracker {
   // Pyramid levels the alignment would use for the object at `world_from_obj`.
   int NumLevelsFor(const Rigid3d& world_from_obj) const;
 
+  // The region modality's colour statistics per camera, learnt from the confidently
+  // tracked frames. Set into another tracker (the re-acquisition's coarse aligners), they
+  // let its silhouette judge candidates with what this one learnt. (Its contour residual's
+  // running mean is not carried over: it is measured at full resolution, and a coarse
+  // level's residual is larger; with it no coarse candidate scored.)
+  const std::vector<ColorHistograms>& region_statistics() const { return region_.histograms(); }
+  void set_region_statistics(const std::vector<ColorHistograms>& statistics) {
+    region_.set_histograms(statistics);
+  }
+
   const Rig& rig() const { return rig_; }
   // The model as rendered: the given one or, with LiveAppearanceOptions, the given one with
   // projective textures from the last confidently tracked frame.
