@@ -188,7 +188,7 @@ struct ReacquisitionOptions {
   // all candidates score_iterations rounds, the better half as many more, ..., up to
   // pyramid.coarse_max_iterations) and at each finer level. A candidate near the object is
   // placed in one or two rounds; one far from it moves the full step every round. 6 -> 2
-  // with the halving: lost frames 4.5-5x -> 2-3.5x the cost of a tracked frame on the
+  // with the halving: lost frames 4.5-6x -> 2.7-3.4x the cost of a tracked frame on the
   // held-out occlusion sequences, same poses.
   int score_iterations = 2;
   // Best-scored candidates then aligned at full resolution. Each costs about two tracked
