@@ -404,12 +404,16 @@ Tracker& Reacquisition::CoarseTracker(int level) {
     o.reacquisition.seed_when_doubtful = false;
     o.threads = 1;  // small images; no pool of its own
     slot = std::make_unique<Tracker>(rig, tracker_.model(), o);
+    slot->set_region_statistics(tracker_.region_statistics());
   }
+  return *slot;
+}
+
+void Reacquisition::ShareRegionStatistics() {
   // The silhouette judges with the colour statistics the tracker learnt from its tracked
   // frames (an aligner only reads them: they are learnt in Track), so that a model whose
   // colours do not judge (untextured, or demoted) can be scored at all.
-  slot->set_region_statistics(tracker_.region_statistics());
-  return *slot;
+  for (auto& [level, coarse] : coarse_) coarse->set_region_statistics(tracker_.region_statistics());
 }
 
 TrackResult Reacquisition::AlignCoarse(const std::vector<cv::Mat>& level_images, int finest,
@@ -439,6 +443,7 @@ TrackResult Reacquisition::ScoreCoarse(const std::vector<cv::Mat>& images,
                                        const Rigid3d& start) {
   const int levels = tracker_.NumLevelsFor(start);
   const int finest = std::max(0, levels - tracker_.options().reacquisition.score_levels);
+  ShareRegionStatistics();
   return AlignCoarse(Downsampled(images, finest), finest, levels - finest, start);
 }
 
@@ -449,6 +454,7 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
   const ReacquisitionOptions& o = options.reacquisition;
   StageTimes times;
   Timer timer;
+  ShareRegionStatistics();
   std::vector<CorrelationSeed> seeds;
   if (o.use_correlation) {
     // The last good pose and its rotations, each located by correlation.
@@ -506,6 +512,20 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
     return a.score != b.score ? a.score > b.score : a.order < b.order;
   };
   std::sort(scored.begin(), scored.end(), by_score);
+  // Aligns every scored candidate on from where it stopped (`num_levels` from `level` on
+  // `level_images`) and sorts them again.
+  auto continue_scored = [&](const std::vector<cv::Mat>& images_at, int level, int num_levels) {
+    for (Scored& c : scored) {
+      TrackResult r = AlignCoarse(images_at, level, num_levels, c.pose);
+      times += r.summary.times;
+      UNSEEN_LOG_DEBUG("candidate {} at level {}: conf {:.2f} at {}", c.order, level,
+                       r.confidence, r.world_from_obj.ToString());
+      if (!r.world_from_obj.IsValid()) continue;
+      c.score = r.confidence;
+      c.pose = r.world_from_obj;
+    }
+    std::sort(scored.begin(), scored.end(), by_score);
+  };
   // Successive halving in rounds at the scoring level: each candidate had score_iterations
   // rounds; the better half, at least refine_candidates, as many more from where they
   // stopped, and so on up to the coarse levels' own limit. A candidate that needs a long
@@ -517,14 +537,7 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
     const int keep = std::max(o.refine_candidates, (static_cast<int>(scored.size()) + 1) / 2);
     if (keep >= static_cast<int>(scored.size()) && rounds > o.score_iterations) break;
     if (keep < static_cast<int>(scored.size())) scored.resize(keep);
-    for (Scored& c : scored) {
-      TrackResult r = AlignCoarse(level_images, finest, levels - finest, c.pose);
-      times += r.summary.times;
-      if (!r.world_from_obj.IsValid()) continue;
-      c.score = r.confidence;
-      c.pose = r.world_from_obj;
-    }
-    std::sort(scored.begin(), scored.end(), by_score);
+    continue_scored(level_images, finest, levels - finest);
   }
   // Successive halving down the pyramid: at each finer level (but the finest) a quarter of
   // the survivors, at least refine_candidates, continue from where they converged; the
@@ -533,17 +546,7 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
     const int keep = std::max(o.refine_candidates, (static_cast<int>(scored.size()) + 3) / 4);
     if (keep < static_cast<int>(scored.size())) scored.resize(keep);
     while (!scored.empty() && scored.back().score < o.min_score) scored.pop_back();
-    const std::vector<cv::Mat> finer = Downsampled(images, level);
-    for (Scored& c : scored) {
-      TrackResult r = AlignCoarse(finer, level, 1, c.pose);
-      times += r.summary.times;
-      UNSEEN_LOG_DEBUG("candidate {} at level {}: conf {:.2f} at {}", c.order, level,
-                       r.confidence, r.world_from_obj.ToString());
-      if (!r.world_from_obj.IsValid()) continue;
-      c.score = r.confidence;
-      c.pose = r.world_from_obj;
-    }
-    std::sort(scored.begin(), scored.end(), by_score);
+    continue_scored(Downsampled(images, level), level, 1);
   }
   UNSEEN_LOG_DEBUG("scored {} candidates in {:.1f} ms", candidates.size(),
                    timer.ElapsedMilliseconds() - correlation_ms);

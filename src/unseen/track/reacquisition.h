@@ -131,6 +131,8 @@ class Reacquisition {
  private:
   // The aligner of pyramid level `level` (a tracker on the rig scaled by 2^-level).
   Tracker& CoarseTracker(int level);
+  // Gives the coarse trackers the tracker's current region colour statistics.
+  void ShareRegionStatistics();
   // Alignment of `start` with the pyramid levels [finest, finest + num_levels) given
   // `level_images`, the frame down-sampled to `finest`.
   TrackResult AlignCoarse(const std::vector<cv::Mat>& level_images, int finest, int num_levels,
