@@ -378,73 +378,24 @@ Reacquisition::Reacquisition(Tracker* tracker) : tracker_(*tracker) {
 
 Reacquisition::~Reacquisition() = default;
 
-Tracker& Reacquisition::CoarseTracker(int level) {
-  std::unique_ptr<Tracker>& slot = coarse_[level];
-  if (!slot) {
-    // Level `level` of the tracker's pyramid as level 0 of another: the cameras scaled by
-    // 2^-level with the size of LevelRect, the per-level settings carried over, and the
-    // iteration limits of a coarse level.
-    Rig rig = tracker_.rig();
-    for (RigCamera& c : rig.cameras) {
-      const PinholeCamera full = c.intrinsics;
-      c.intrinsics = full.PyramidLevel(level);
-      c.intrinsics.width = full.width >> level;
-      c.intrinsics.height = full.height >> level;
-    }
-    TrackerOptions o = tracker_.options();
-    o.preprocess.linf_sigma_px = o.preprocess.LinfSigmaAtLevel(level);
-    o.preprocess.shading_sigma_px = o.preprocess.ShadingSigmaAtLevel(level);
-    o.pyramid.max_iterations_per_level =
-        std::min(o.pyramid.coarse_max_iterations, o.reacquisition.score_iterations);
-    o.pyramid.coarse_max_iterations = o.pyramid.max_iterations_per_level;
-    o.pyramid.min_update_px = o.pyramid.coarse_min_update_px;
-    o.pyramid.supersampled_levels = std::max(0, o.pyramid.supersampled_levels - level);
-    o.failure.search_when_lost = false;
-    o.reacquisition.use_correlation = false;
-    o.reacquisition.seed_when_doubtful = false;
-    o.threads = 1;  // small images; no pool of its own
-    slot = std::make_unique<Tracker>(rig, tracker_.model(), o);
-    slot->set_region_statistics(tracker_.region_statistics());
-  }
-  return *slot;
-}
-
-void Reacquisition::ShareRegionStatistics() {
-  // The silhouette judges with the colour statistics the tracker learnt from its tracked
-  // frames (an aligner only reads them: they are learnt in Track), so that a model whose
-  // colours do not judge (untextured, or demoted) can be scored at all.
-  for (auto& [level, coarse] : coarse_) coarse->set_region_statistics(tracker_.region_statistics());
-}
-
-TrackResult Reacquisition::AlignCoarse(const std::vector<cv::Mat>& level_images, int finest,
+TrackResult Reacquisition::AlignCoarse(const std::vector<cv::Mat>& images, int finest,
                                        int num_levels, const Rigid3d& start) {
-  if (finest == 0) return tracker_.Align(level_images, start, num_levels);
-  return CoarseTracker(finest).Align(level_images, start, num_levels);
+  // Colour alone, as the correlation that found the candidates: measured depth serves the
+  // full-resolution refinement.
+  if (finest == 0) return tracker_.Align(images, start, num_levels);
+  const TrackerOptions& options = tracker_.options();
+  Frame frame;
+  frame.images = images;
+  return tracker_.AlignLevels(
+      frame, start, finest, num_levels,
+      std::min(options.pyramid.coarse_max_iterations, options.reacquisition.score_iterations));
 }
-
-namespace {
-
-std::vector<cv::Mat> Downsampled(const std::vector<cv::Mat>& images, int level) {
-  if (level == 0) return images;
-  std::vector<cv::Mat> out;
-  for (const cv::Mat& im : images) {
-    if (im.empty()) {  // a camera without an image stays without one
-      out.emplace_back();
-      continue;
-    }
-    out.push_back(DownsampledRegion(im, level, LevelRect(im.cols, im.rows, level)));
-  }
-  return out;
-}
-
-}  // namespace
 
 TrackResult Reacquisition::ScoreCoarse(const std::vector<cv::Mat>& images,
                                        const Rigid3d& start) {
   const int levels = tracker_.NumLevelsFor(start);
   const int finest = std::max(0, levels - tracker_.options().reacquisition.score_levels);
-  ShareRegionStatistics();
-  return AlignCoarse(Downsampled(images, finest), finest, levels - finest, start);
+  return AlignCoarse(images, finest, levels - finest, start);
 }
 
 TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
@@ -454,7 +405,6 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
   const ReacquisitionOptions& o = options.reacquisition;
   StageTimes times;
   Timer timer;
-  ShareRegionStatistics();
   std::vector<CorrelationSeed> seeds;
   if (o.use_correlation) {
     // The last good pose and its rotations, each located by correlation.
@@ -483,7 +433,6 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
   // Score every candidate at the coarse levels (the full pyramid when it has no more).
   const int levels = tracker_.NumLevelsFor(last_good);
   const int finest = std::max(0, levels - o.score_levels);
-  const std::vector<cv::Mat> level_images = Downsampled(images, finest);
   struct Scored {
     double score;
     Rigid3d pose;
@@ -494,7 +443,7 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
   best.world_from_obj = coasted;
   int choice = -1;  // the candidate `best` came from
   for (int i = 0; i < static_cast<int>(candidates.size()); ++i) {
-    TrackResult c = AlignCoarse(level_images, finest, levels - finest, candidates[i]);
+    TrackResult c = AlignCoarse(images, finest, levels - finest, candidates[i]);
     times += c.summary.times;
     if (!c.world_from_obj.IsValid()) continue;
     if (finest == 0) {  // already aligned at full resolution
@@ -512,11 +461,11 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
     return a.score != b.score ? a.score > b.score : a.order < b.order;
   };
   std::sort(scored.begin(), scored.end(), by_score);
-  // Aligns every scored candidate on from where it stopped (`num_levels` from `level` on
-  // `level_images`) and sorts them again.
-  auto continue_scored = [&](const std::vector<cv::Mat>& images_at, int level, int num_levels) {
+  // Aligns every scored candidate on from where it stopped (`num_levels` from `level`) and
+  // sorts them again.
+  auto continue_scored = [&](int level, int num_levels) {
     for (Scored& c : scored) {
-      TrackResult r = AlignCoarse(images_at, level, num_levels, c.pose);
+      TrackResult r = AlignCoarse(images, level, num_levels, c.pose);
       times += r.summary.times;
       UNSEEN_LOG_DEBUG("candidate {} at level {}: conf {:.2f} at {}", c.order, level,
                        r.confidence, r.world_from_obj.ToString());
@@ -537,7 +486,7 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
     const int keep = std::max(o.refine_candidates, (static_cast<int>(scored.size()) + 1) / 2);
     if (keep >= static_cast<int>(scored.size()) && rounds > o.score_iterations) break;
     if (keep < static_cast<int>(scored.size())) scored.resize(keep);
-    continue_scored(level_images, finest, levels - finest);
+    continue_scored(finest, levels - finest);
   }
   // Successive halving down the pyramid: at each finer level (but the finest) a quarter of
   // the survivors, at least refine_candidates, continue from where they converged; the
@@ -546,7 +495,7 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
     const int keep = std::max(o.refine_candidates, (static_cast<int>(scored.size()) + 3) / 4);
     if (keep < static_cast<int>(scored.size())) scored.resize(keep);
     while (!scored.empty() && scored.back().score < o.min_score) scored.pop_back();
-    continue_scored(Downsampled(images, level), level, 1);
+    continue_scored(level, 1);
   }
   UNSEEN_LOG_DEBUG("scored {} candidates in {:.1f} ms", candidates.size(),
                    timer.ElapsedMilliseconds() - correlation_ms);

@@ -16,8 +16,6 @@
 // Options: ReacquisitionOptions (tracker_options.h).
 #pragma once
 
-#include <map>
-#include <memory>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -95,8 +93,9 @@ std::vector<Rigid3d> ReacquisitionCandidates(const Rigid3d& last_good,
                                              double translation_step_m,
                                              const ReacquisitionOptions& options);
 
-// Re-acquisition for one Tracker: holds the coarse-level aligners that score candidates.
-// Uses only the tracker's public interface (Align for full-resolution refinement).
+// Re-acquisition for one Tracker: scores candidates with the tracker's own aligner at the
+// coarse levels (Tracker::AlignLevels) and refines the best at full resolution
+// (Tracker::Align). Uses only the tracker's public interface.
 class Reacquisition {
  public:
   // `tracker` must outlive this; its model and options are read at construction (make a
@@ -129,19 +128,15 @@ class Reacquisition {
   double sphere_radius() const { return sphere_radius_; }
 
  private:
-  // The aligner of pyramid level `level` (a tracker on the rig scaled by 2^-level).
-  Tracker& CoarseTracker(int level);
-  // Gives the coarse trackers the tracker's current region colour statistics.
-  void ShareRegionStatistics();
-  // Alignment of `start` with the pyramid levels [finest, finest + num_levels) given
-  // `level_images`, the frame down-sampled to `finest`.
-  TrackResult AlignCoarse(const std::vector<cv::Mat>& level_images, int finest, int num_levels,
+  // The tracker's alignment of `start` on the pyramid levels [finest, finest + num_levels)
+  // of `images` (full resolution), score_iterations rounds per level
+  // (Tracker::AlignLevels); the full alignment when `finest` is 0.
+  TrackResult AlignCoarse(const std::vector<cv::Mat>& images, int finest, int num_levels,
                           const Rigid3d& start);
 
   Tracker& tracker_;
   Eigen::Vector3d sphere_centre_ = Eigen::Vector3d::Zero();
   double sphere_radius_ = 0.0;
-  std::map<int, std::unique_ptr<Tracker>> coarse_;
 };
 
 }  // namespace unseen

@@ -174,7 +174,11 @@ TEST_F(Reacquire, CoarseScoreIsHighAtTheTruthAndLowFarFromIt) {
       {image}, Rigid3d(truth.rotation(), truth.translation() + Eigen::Vector3d(0.01, 0, 0)));
   const TrackResult far = reacquisition.ScoreCoarse(
       {image}, Rigid3d(truth.rotation(), truth.translation() + Eigen::Vector3d(0.2, 0, 0)));
-  EXPECT_LT(near.summary.num_levels, tracker.NumLevelsFor(truth));
+  // Only the coarse levels ran, the tracker's own (no clone of it).
+  EXPECT_EQ(near.summary.num_levels, tracker.NumLevelsFor(truth));
+  ASSERT_GE(near.summary.num_levels, 2);
+  EXPECT_EQ(near.summary.iterations_per_level[0], 0);
+  EXPECT_GT(near.summary.iterations_per_level.back(), 0);
   // Within about a pixel of the coarse level (5 mm).
   EXPECT_LT(Difference(near.world_from_obj, truth).translation, 0.008) << near.BriefReport();
   EXPECT_GT(near.confidence, 0.3) << near.BriefReport();

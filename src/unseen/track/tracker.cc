@@ -349,13 +349,32 @@ bool Tracker::PrepareVirtual(const Rigid3d& cam_from_obj, int level, ThreadPool*
   return true;
 }
 
-TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int num_levels) {
+TrackResult Tracker::AlignLevels(const Frame& frame, const Rigid3d& start, int finest_level,
+                                 int num_levels, int max_iterations) {
+  UNSEEN_CHECK(start.IsValid(), "Tracker::AlignLevels: start pose {} is not valid",
+               start.ToString());
+  UNSEEN_CHECK(finest_level >= 0 && num_levels >= 1 && finest_level + num_levels <= 8,
+               "Tracker::AlignLevels: levels [{}, {}) not within [0, 8]", finest_level,
+               finest_level + num_levels);
+  UNSEEN_CHECK(max_iterations >= 1, "Tracker::AlignLevels: max_iterations {} must be >= 1",
+               max_iterations);
+  LevelSpan span;
+  span.finest = finest_level;
+  span.num_levels = num_levels;
+  span.max_iterations = max_iterations;
+  span.scoring = true;
+  return AlignChecked(CheckFrame(frame), start, span);
+}
+
+TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, const LevelSpan& span) {
   const std::vector<cv::Mat>& images = frame.images;
   const PyramidOptions& po = options_.pyramid;
   const int ncam = rig_.size();
   TrackResult result;
   SolveSummary& s = result.summary;
-  s.num_levels = num_levels > 0 ? num_levels : NumLevelsFor(start);
+  // Levels [finest, s.num_levels), coarsest first; the finest one's rows are the result's.
+  const int finest = span.finest;
+  s.num_levels = finest + (span.num_levels > 0 ? span.num_levels : NumLevelsFor(start));
   s.iterations_per_level.assign(s.num_levels, 0);
   // Input around the object: what the filters need beyond the rim and, with the region
   // modality, a whole correspondence line outside the contour (a line that leaves the
@@ -380,7 +399,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
   Rigid3d pose = start;
   std::vector<Vector6d> moved_in_cam(ncam, Vector6d::Zero());
 
-  for (int level = s.num_levels - 1; level >= 0; --level) {
+  for (int level = s.num_levels - 1; level >= finest; --level) {
     // Region of interest (3.5): at the coarsest level the bounding sphere's rectangle,
     // whose slack around the object leaves room for the object to be found some way off;
     // at finer levels, where the pose is already close, the tighter object rectangle. Both
@@ -409,9 +428,9 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
     }
     s.times.preprocess_ms += timer.ElapsedMilliseconds();
 
-    const int max_iterations = level == 0 ? po.max_iterations_per_level
-                                          : std::min(po.max_iterations_per_level,
-                                                     po.coarse_max_iterations);
+    int max_iterations = level == 0 ? po.max_iterations_per_level
+                                    : std::min(po.max_iterations_per_level, po.coarse_max_iterations);
+    if (span.max_iterations > 0) max_iterations = std::min(max_iterations, span.max_iterations);
     const double min_update_px = level == 0 ? po.min_update_px : po.coarse_min_update_px;
     for (int iteration = 0; iteration < max_iterations; ++iteration) {
       ++s.renders;
@@ -480,7 +499,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
         round.photometric_region = &w.region;
         round.photometric_depth = &w.depth_used;
         if (use_depth && !frame.depths[c].empty()) round.measured_depth = &frame.depths[c];
-        round.learn = level == 0;
+        round.learn = level == 0 && !span.scoring;
         round.first_frame = learn_from_start_;
         if (use_photometric_) photometric_.AddEquations(round);
         depth_.AddEquations(round);  // rows only where the frame has depth
@@ -494,7 +513,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
       const FlowSolution solution = SolveJoint(
           {&photometric_.equations(), &depth_.equations(), &region_.equations()}, options_.solver);
       if (coarsest && iteration == 0) s.start_region_counts += region_counts;
-      if (level == 0) {
+      if (level == finest) {
         s.object_px = 0.0;
         for (int c = 0; c < ncam; ++c) {
           const CameraWork& w = *work_[c];
@@ -515,7 +534,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
       }
       if (!solution.ok) {
         s.times.solve_ms += timer.ElapsedMilliseconds();
-        if (level == 0) s.last_update_px = std::numeric_limits<double>::infinity();
+        if (level == finest) s.last_update_px = std::numeric_limits<double>::infinity();
         break;
       }
       Vector6d twist = solution.twist;
@@ -531,7 +550,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
                        solution.final_rms_px, update_px, twist(0), twist(1), twist(2), twist(3),
                        twist(4), twist(5));
       ++s.iterations_per_level[level];
-      if (level == 0) s.last_update_px = update_px;
+      if (level == finest) s.last_update_px = update_px;
       if (update_px < min_update_px) {
         s.times.solve_ms += timer.ElapsedMilliseconds();
         break;
@@ -546,7 +565,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
       // judged by a render; nor do re-solves go on once they stop shrinking.
       Vector6d moved = twist;  // since this round's render
       const int resolves =
-          level == 0 && iteration + 1 < max_iterations ? po.resample_iterations : 0;
+          level == finest && iteration + 1 < max_iterations ? po.resample_iterations : 0;
       for (int k = 0; k < resolves && update_px >= min_update_px; ++k) {
         for (int c = 0; c < ncam; ++c) {
           const Eigen::Matrix3d cam_from_world = cam_from_world_[c].RotationMatrix();
@@ -582,7 +601,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, int 
   }
   s.correction_px = UpdatePixels(start, TwistBetween(start, pose), 0);
   result.world_from_obj = pose;
-  result.confidence = Confidence(s);
+  result.confidence = Confidence(s, /*with_references=*/!span.scoring);
   if (!std::isfinite(result.confidence)) result.confidence = 0.0;
   return result;
 }

@@ -50,8 +50,9 @@ struct StageTimes {
 
 // What the alignment of one frame did.
 struct SolveSummary {
-  int num_levels = 0;                    // pyramid levels used
-  std::vector<int> iterations_per_level; // solves; index = level (0 = full resolution)
+  int num_levels = 0;                    // pyramid depth: the coarsest level used + 1
+  std::vector<int> iterations_per_level; // solves; index = level (0 = full resolution;
+                                         // 0 solves below AlignLevels' finest level)
   int renders = 0;                       // render-solve rounds over all levels
   int resamples = 0;                     // solves that re-measured a round's rows instead
   double object_px = 0.0;  // the object's rendered area in the last level-0 round, all cameras
@@ -134,18 +135,17 @@ class Tracker {
   TrackResult Align(const std::vector<cv::Mat>& images_per_camera, const Rigid3d& world_from_obj,
                     int num_levels = 0);
 
+  // The alignment of `start` on the pyramid levels [finest_level, finest_level +
+  // num_levels) only, at most `max_iterations` rounds (renders) per level, as the
+  // re-acquisition scores its candidates: nothing is learnt (the region modality judges
+  // with the colour statistics of the tracked frames), and the confidence is judged at
+  // `finest_level`, in its pixels, without the references learnt at full resolution
+  // (on-screen area, residual floors). `frame` at full resolution.
+  TrackResult AlignLevels(const Frame& frame, const Rigid3d& start, int finest_level,
+                          int num_levels, int max_iterations);
+
   // Pyramid levels the alignment would use for the object at `world_from_obj`.
   int NumLevelsFor(const Rigid3d& world_from_obj) const;
-
-  // The region modality's colour statistics per camera, learnt from the confidently
-  // tracked frames. Set into another tracker (the re-acquisition's coarse aligners), they
-  // let its silhouette judge candidates with what this one learnt. (Its contour residual's
-  // running mean is not carried over: it is measured at full resolution, and a coarse
-  // level's residual is larger; with it no coarse candidate scored.)
-  const std::vector<ColorHistograms>& region_statistics() const { return region_.histograms(); }
-  void set_region_statistics(const std::vector<ColorHistograms>& statistics) {
-    region_.set_histograms(statistics);
-  }
 
   const Rig& rig() const { return rig_; }
   // The model as rendered: the given one or, with LiveAppearanceOptions, the given one with
@@ -166,7 +166,20 @@ class Tracker {
   struct CameraWork;
   // The frame with colour converted to CV_32FC3 and every image checked against its camera.
   Frame CheckFrame(const Frame& frame) const;
-  TrackResult AlignChecked(const Frame& frame, const Rigid3d& start, int num_levels);
+  // Which pyramid levels an alignment runs and how (Align: all from level 0; AlignLevels:
+  // a span of coarse levels for scoring).
+  struct LevelSpan {
+    int finest = 0;          // the level whose result is returned and judged
+    int num_levels = 0;      // levels from `finest` up; 0: NumLevelsFor the start pose
+    int max_iterations = 0;  // rounds per level at most; 0: PyramidOptions' limits
+    bool scoring = false;    // AlignLevels: no learning, confidence without references
+  };
+  TrackResult AlignChecked(const Frame& frame, const Rigid3d& start, int num_levels) {
+    LevelSpan span;
+    span.num_levels = num_levels;
+    return AlignChecked(frame, start, span);
+  }
+  TrackResult AlignChecked(const Frame& frame, const Rigid3d& start, const LevelSpan& span);
   // The alignment of a frame from the predicted pose, with the pyramid depth the recent
   // corrections call for (PyramidOptions::adaptive_levels).
   TrackResult AlignPredicted(const Frame& frame, const Rigid3d& predicted);
@@ -176,11 +189,13 @@ class Tracker {
   TrackResult AlignFirstFrame(const Frame& frame, const Rigid3d& given);
   // The confidence of an alignment: what the modalities vouch for, times the plausibility
   // of the object's on-screen area (FailureOptions::min_area_ratio).
-  double Confidence(const SolveSummary& summary) const;
-  double ModalityConfidence(const SolveSummary& summary) const;
+  // `with_references` false: a coarse candidate's (LevelSpan::scoring), without the
+  // references learnt at full resolution (area, residual floors).
+  double Confidence(const SolveSummary& summary, bool with_references = true) const;
+  double ModalityConfidence(const SolveSummary& summary, bool with_references = true) const;
   // The photometric modality's own judgement of the alignment in [0, 1] (FailureOptions:
   // support, residual, convergence), whatever the other modalities say.
-  double PhotometricFit(const SolveSummary& summary) const;
+  double PhotometricFit(const SolveSummary& summary, bool with_references = true) const;
   // The region modality's residual over the running mean of the confident frames' (with
   // FailureOptions::min_reference_region_residual as its floor); 0 before any.
   double RegionResidualRatio(const SolveSummary& summary) const;

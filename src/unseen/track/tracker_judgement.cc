@@ -19,13 +19,13 @@ double Ramp(double value, double zero_at, double one_at) {
 
 }  // namespace
 
-double Tracker::PhotometricFit(const SolveSummary& s) const {
+double Tracker::PhotometricFit(const SolveSummary& s, bool with_references) const {
   const FailureOptions& f = options_.failure;
   if (s.counts.used < f.min_pixels) return 0.0;
   const double support_term = std::max(Ramp(s.share, f.min_share, f.good_share),
                                        Ramp(double(s.counts.used), f.min_used_px, f.good_used_px));
   double residual_term = Ramp(s.initial_residual_px, f.bad_residual_px, f.good_residual_px);
-  if (residual_reference_px_ > 0.0) {
+  if (with_references && residual_reference_px_ > 0.0) {
     const double reference = std::max(residual_reference_px_, f.min_reference_residual_px);
     residual_term *= Ramp(s.initial_residual_px / reference, f.bad_residual_ratio,
                           f.good_residual_ratio);
@@ -34,20 +34,20 @@ double Tracker::PhotometricFit(const SolveSummary& s) const {
   return support_term * residual_term * update_term;
 }
 
-double Tracker::Confidence(const SolveSummary& s) const {
+double Tracker::Confidence(const SolveSummary& s, bool with_references) const {
   const FailureOptions& f = options_.failure;
   if (s.equations < f.min_pixels) return 0.0;
   double area_term = 1.0;
-  if (area_reference_px_ > 0.0 && s.object_px > 0.0) {
+  if (with_references && area_reference_px_ > 0.0 && s.object_px > 0.0) {
     const double ratio = s.object_px / area_reference_px_;
     area_term = Ramp(std::min(ratio, 1.0 / ratio), f.min_area_ratio, f.good_area_ratio);
   }
-  return area_term * ModalityConfidence(s);
+  return area_term * ModalityConfidence(s, with_references);
 }
 
-double Tracker::ModalityConfidence(const SolveSummary& s) const {
+double Tracker::ModalityConfidence(const SolveSummary& s, bool with_references) const {
   const FailureOptions& f = options_.failure;
-  const double photometric = PhotometricJudges() ? PhotometricFit(s) : 0.0;
+  const double photometric = PhotometricJudges() ? PhotometricFit(s, with_references) : 0.0;
   // The silhouette judges the frame of a model without appearance; with measured depth to
   // guard it, it also vouches for a frame whose texture says little (motion blur). Measured
   // depth, when there is some, must agree in every case.
@@ -56,7 +56,7 @@ double Tracker::ModalityConfidence(const SolveSummary& s) const {
   if (region_agreement >= 0.0 && s.region_counts.used >= f.min_region_lines) {
     region_term =
         Ramp(region_agreement, options_.region.bad_agreement, options_.region.good_agreement);
-    if (region_residual_reference_ > 0.0) {
+    if (with_references && region_residual_reference_ > 0.0) {
       region_term *= Ramp(RegionResidualRatio(s), f.bad_region_residual_ratio,
                           f.good_region_residual_ratio);
     }

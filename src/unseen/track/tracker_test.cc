@@ -96,6 +96,40 @@ TEST_F(TrackerScene, StartingAtTheTruthStaysThere) {
   EXPECT_EQ(tracker.NumLevelsFor(truth_), 3);  // ~140 px across, >= 32 px at the coarsest
 }
 
+TEST_F(TrackerScene, AligningCoarseLevelsOnlyJudgesThereAndLearnsNothing) {
+  Tracker tracker(rig_, cube_);
+  Tracker untouched(rig_, cube_);
+  tracker.Initialize(truth_);
+  untouched.Initialize(truth_);
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_GT(tracker.Track({image_}).confidence, 0.5);
+    ASSERT_GT(untouched.Track({image_}).confidence, 0.5);
+  }
+  Vector6d d;
+  d << 0.012, -0.008, 0.02, 0.0, 3 * kDeg, 0.0;
+  Frame frame;
+  frame.images = {image_};
+  const TrackResult whole = tracker.AlignLevels(frame, Perturb(truth_, d), 0, 3, 4);
+  EXPECT_LT(Difference(whole.world_from_obj, truth_).translation, 0.001) << whole.BriefReport();
+  const TrackResult coarse = tracker.AlignLevels(frame, Perturb(truth_, d), 1, 2, 4);
+  ASSERT_EQ(coarse.summary.num_levels, 3);
+  EXPECT_EQ(coarse.summary.iterations_per_level[0], 0);  // full resolution untouched
+  EXPECT_GT(coarse.summary.iterations_per_level[1], 0);
+  // Within a pixel of level 1 (~7 mm at 1 m), and judged there.
+  EXPECT_LT(Difference(coarse.world_from_obj, truth_).translation, 0.007) << coarse.BriefReport();
+  EXPECT_GT(coarse.confidence, 0.5) << coarse.BriefReport();
+  // Neither alignment changed the tracking state: the next frame is tracked exactly as
+  // without them.
+  const TrackResult next = tracker.Track({image_});
+  const TrackResult expected = untouched.Track({image_});
+  EXPECT_EQ(next.world_from_obj.translation(), expected.world_from_obj.translation());
+  EXPECT_EQ(next.confidence, expected.confidence);
+  EXPECT_THROW(tracker.AlignLevels(frame, truth_, -1, 2, 4), Error);
+  EXPECT_THROW(tracker.AlignLevels(frame, truth_, 1, 0, 4), Error);
+  EXPECT_THROW(tracker.AlignLevels(frame, truth_, 6, 3, 4), Error);
+  EXPECT_THROW(tracker.AlignLevels(frame, truth_, 1, 2, 0), Error);
+}
+
 // Multiplies the image by a gain and a smooth horizontal shading ramp.
 cv::Mat Shade(const cv::Mat& image) {
   cv::Mat out = image.clone();
