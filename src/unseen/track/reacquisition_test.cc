@@ -234,10 +234,9 @@ TEST_F(Reacquire, AJumpWithARotationIsReacquiredByTheRotationCandidates) {
 
 TEST_F(Reacquire, AnUntexturedObjectThatLeftTheViewIsReacquired) {
   // One flat colour: the tracker's photometric modality does not run and the silhouette
-  // judges the frames. (On this clean render the coarse aligners' own photometric fit
-  // already scores the candidates; on the untextured figure before a pale building it
-  // does not, and only the silhouette with the tracker's learnt colour statistics finds
-  // it again: eval/development_sequences_test, UntexturedFigureIsFoundAgainAfterABlackout.)
+  // judges the frames and scores the candidates, with the colour statistics learnt from
+  // the tracked frames (end to end on the untextured figure before a pale building:
+  // eval/development_sequences_test, UntexturedFigureIsFoundAgainAfterABlackout).
   Mesh plain = cube_;
   for (Material& m : plain.materials) {
     m.texture.release();
