@@ -1,0 +1,198 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/model/plane_sweep.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+cv::Mat Box(const cv::Mat& m, int window) {
+  cv::Mat out;
+  cv::boxFilter(m, out, CV_32F, cv::Size(window, window), cv::Point(-1, -1), true,
+                cv::BORDER_REPLICATE);
+  return out;
+}
+
+cv::Matx33d ToCv(const Eigen::Matrix3d& m) {
+  cv::Matx33d out;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) out(r, c) = m(r, c);
+  }
+  return out;
+}
+
+}  // namespace
+
+PlaneSweepDepth::PlaneSweepDepth(const Rig& rig, int reference,
+                                 const DepthExtractionOptions& options)
+    : rig_(rig), reference_(reference), options_(options) {
+  options_.Check();
+  UNSEEN_CHECK(rig_.size() >= 2, "depth source planesweep needs two cameras or more; the rig has {}",
+               rig_.size());
+}
+
+DepthMap PlaneSweepDepth::Extract(const Frame& frame, const PixelRect& roi, double near_m,
+                                  double far_m) const {
+  const PlaneSweepOptions& o = options_.plane_sweep;
+  const RigCamera& ref = rig_.cameras[reference_];
+  const PinholeCamera& kref = ref.intrinsics;
+  const cv::Mat ref_grey = GreyImage(frame, rig_, reference_, "planesweep");
+  DepthMap out;
+  out.texturedness = Texturedness(frame.images[reference_]);
+  out.depth = cv::Mat::zeros(kref.height, kref.width, CV_32FC1);
+  const PixelRect r = (roi.empty() ? kref.ImageRect() : roi).Intersect(kref.ImageRect());
+  const double near = near_m > 0.0 ? near_m : options_.min_depth_m;
+  const double far = far_m > 0.0 ? far_m : options_.max_depth_m;
+  UNSEEN_CHECK(near > 0.0 && far > near, "depth source planesweep: depth range [{}, {}] m is empty",
+               near, far);
+  if (r.width() < o.window_px || r.height() < o.window_px) return out;
+
+  // The other cameras with an image this frame.
+  std::vector<int> others;
+  std::vector<cv::Mat> greys;
+  for (int c = 0; c < rig_.size(); ++c) {
+    if (c == reference_ || c >= static_cast<int>(frame.images.size()) || frame.images[c].empty()) {
+      continue;
+    }
+    others.push_back(c);
+    greys.push_back(GreyImage(frame, rig_, c, "planesweep"));
+  }
+  UNSEEN_CHECK(!others.empty(), "depth source planesweep: frame {} has no image besides camera '{}'",
+               frame.frame_id, ref.name);
+  const int num_others = static_cast<int>(others.size());
+  const int num_best = std::clamp(static_cast<int>(std::lround(o.best_share * num_others)),
+                                  std::min(2, num_others), num_others);
+
+  // Work on the region grown by half a window, so that its border pixels have whole windows.
+  const int half = o.window_px / 2;
+  const PixelRect w = r.Grow(half).Intersect(kref.ImageRect());
+  const cv::Rect wrect(w.x0, w.y0, w.width(), w.height());
+  const cv::Mat ref_w = ref_grey(wrect);
+  const cv::Mat mean_r = Box(ref_w, o.window_px);
+  const cv::Mat var_r = Box(ref_w.mul(ref_w), o.window_px) - mean_r.mul(mean_r);
+
+  // Plane k at inverse depth 1/far + k * step (k = 0: the farthest).
+  const int planes = o.planes;
+  const double inv_far = 1.0 / far;
+  const double inv_step = (1.0 / near - inv_far) / (planes - 1);
+  const Eigen::Matrix3d kref_inv = kref.K().inverse();
+  const cv::Matx33d shift(1, 0, w.x0, 0, 1, w.y0, 0, 0, 1);  // region pixel -> image pixel
+
+  // The cost volume over the region (rows of the grown region, cropped below).
+  const int n = w.width() * w.height();
+  std::vector<float> volume(static_cast<size_t>(planes) * n);
+  std::vector<cv::Mat> camera_costs(others.size());
+  cv::Mat warped, valid, ones_mask;
+  for (int k = 0; k < planes; ++k) {
+    const double z = 1.0 / (inv_far + k * inv_step);
+    for (size_t j = 0; j < others.size(); ++j) {
+      const RigCamera& cam = rig_.cameras[others[j]];
+      const Rigid3d other_from_ref = cam.cam_from_world() * ref.world_from_cam;
+      // The plane z = const of the reference camera: X_j = (R + t n^T / z) X_ref.
+      Eigen::Matrix3d h = other_from_ref.RotationMatrix();
+      h.col(2) += other_from_ref.translation() / z;
+      const cv::Matx33d homography = ToCv(cam.intrinsics.K() * h * kref_inv) * shift;
+      cv::warpPerspective(greys[j], warped, homography, wrect.size(),
+                          cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT, -1.0);
+      // Where the other camera does not see the plane (warped from outside its image).
+      cv::threshold(warped, valid, -0.5, 1.0, cv::THRESH_BINARY);
+      const cv::Mat mean_w = Box(warped, o.window_px);
+      const cv::Mat var_w = Box(warped.mul(warped), o.window_px) - mean_w.mul(mean_w);
+      const cv::Mat cross = Box(ref_w.mul(warped), o.window_px) - mean_r.mul(mean_w);
+      const cv::Mat coverage = Box(valid, o.window_px);
+      cv::Mat& cost = camera_costs[j];
+      cost.create(wrect.size(), CV_32FC1);
+      for (int y = 0; y < w.height(); ++y) {
+        const float* vr = var_r.ptr<float>(y);
+        const float* vw = var_w.ptr<float>(y);
+        const float* cr = cross.ptr<float>(y);
+        const float* cov = coverage.ptr<float>(y);
+        float* co = cost.ptr<float>(y);
+        for (int x = 0; x < w.width(); ++x) {
+          const float denom = std::sqrt(std::max(vr[x] * vw[x], 1e-12f));
+          const float ncc = std::clamp(cr[x] / denom, -1.0f, 1.0f);
+          co[x] = cov[x] > 0.999f ? 1.0f - ncc : 2.0f;
+        }
+      }
+    }
+    // The mean of the best cameras' costs.
+    float* vk = volume.data() + static_cast<size_t>(k) * n;
+    std::vector<float> per_camera(others.size());
+    for (int y = 0; y < w.height(); ++y) {
+      for (int x = 0; x < w.width(); ++x) {
+        for (size_t j = 0; j < others.size(); ++j) per_camera[j] = camera_costs[j].at<float>(y, x);
+        if (num_best < static_cast<int>(per_camera.size())) {
+          std::nth_element(per_camera.begin(), per_camera.begin() + (num_best - 1),
+                           per_camera.end());
+        }
+        float sum = 0.0f;
+        if (num_best == static_cast<int>(per_camera.size())) {
+          for (float c : per_camera) sum += c;
+        } else {
+          // nth_element leaves the num_best smallest in front (unordered).
+          for (int b = 0; b < num_best; ++b) sum += per_camera[b];
+        }
+        vk[y * w.width() + x] = sum / num_best;
+      }
+    }
+  }
+
+  // Winner takes all, then the smoothness passes: the plane minimising its cost plus
+  // smoothness times its distance (in planes) from the median of the 3x3 neighbours'.
+  cv::Mat label(wrect.size(), CV_32FC1);
+  for (int i = 0; i < n; ++i) {
+    int best = 0;
+    for (int k = 1; k < planes; ++k) {
+      if (volume[static_cast<size_t>(k) * n + i] < volume[static_cast<size_t>(best) * n + i]) best = k;
+    }
+    label.at<float>(i / w.width(), i % w.width()) = static_cast<float>(best);
+  }
+  const float lambda = static_cast<float>(o.smoothness);
+  for (int pass = 0; pass < o.refine_iterations && lambda > 0.0f; ++pass) {
+    cv::Mat median;
+    cv::medianBlur(label, median, 3);
+    for (int i = 0; i < n; ++i) {
+      const float m = median.at<float>(i / w.width(), i % w.width());
+      int best = 0;
+      float best_cost = std::numeric_limits<float>::infinity();
+      for (int k = 0; k < planes; ++k) {
+        const float c = volume[static_cast<size_t>(k) * n + i] + lambda * std::abs(k - m);
+        if (c < best_cost) {
+          best_cost = c;
+          best = k;
+        }
+      }
+      label.at<float>(i / w.width(), i % w.width()) = static_cast<float>(best);
+    }
+  }
+
+  // Depth where the winner is distinct, good and inside the range, to a fraction of a plane.
+  ForEachTexturedPixel(&out, r, options_.min_texturedness, [&](int x, int y, float* depth) {
+    const int i = (y - w.y0) * w.width() + (x - w.x0);
+    const int k = static_cast<int>(label.at<float>(y - w.y0, x - w.x0));
+    if (k <= 0 || k >= planes - 1) return;  // at the range's ends: likely beyond it
+    const float c = volume[static_cast<size_t>(k) * n + i];
+    if (c > o.max_cost) return;
+    float second = std::numeric_limits<float>::infinity();
+    for (int q = 0; q < planes; ++q) {
+      if (std::abs(q - k) > 1) second = std::min(second, volume[static_cast<size_t>(q) * n + i]);
+    }
+    if (second - c < o.uniqueness) return;
+    const float cm = volume[static_cast<size_t>(k - 1) * n + i];
+    const float cp = volume[static_cast<size_t>(k + 1) * n + i];
+    const float curvature = cm - 2.0f * c + cp;
+    const float offset =
+        curvature > 1e-6f ? std::clamp(0.5f * (cm - cp) / curvature, -0.5f, 0.5f) : 0.0f;
+    *depth = static_cast<float>(1.0 / (inv_far + (k + offset) * inv_step));
+  });
+  return out;
+}
+
+}  // namespace unseen
