@@ -129,7 +129,7 @@ TEST_F(SurfaceMesh, NothingToModelIsAStatusAndBadInputAnError) {
                                 options_, nullptr, &why));
   EXPECT_NE(why.find("empty"), std::string::npos) << why;
   DepthMap no_depth = map_;
-  no_depth.depth = cv::Mat::zeros(map_.depth.size(), CV_32FC1);
+  no_depth.depth = cv::Mat(map_.depth.size(), CV_32FC1, cv::Scalar(0));  // not in place
   EXPECT_FALSE(BuildSurfaceMesh(no_depth, scene_.frame.images[0], camera_, cam_from_obj_,
                                 scene_.object_masks[0], options_, nullptr, &why));
   EXPECT_NE(why.find("vertices"), std::string::npos) << why;

@@ -1,0 +1,80 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// The on-line modeller (SPEC 5, thesis chapter 3): from one frame of the rig, an
+// approximate textured model of the object of interest in a given object frame — depth
+// map (depth_extraction.h), segmentation (object_segmentation.h), mesh and projective
+// texture (surface_mesh.h) — for the tracker to track an object it has no model of. Also
+// the initial object frame for a selected region (SPEC 4.4).
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "unseen/camera/camera.h"
+#include "unseen/geometry/rigid3.h"
+#include "unseen/io/sequence.h"
+#include "unseen/mesh/mesh.h"
+#include "unseen/model/depth_extraction.h"
+#include "unseen/model/object_segmentation.h"
+#include "unseen/model/surface_mesh.h"
+
+namespace unseen {
+
+struct ModellerOptions {
+  DepthExtractionOptions depth;
+  SegmentationOptions segmentation;
+  SurfaceMeshOptions mesh;  // max_radius_m 0: segmentation.max_radius_m
+  // SPEC 4.4: the origin of a new object frame lies this far behind the visible surface at
+  // the region's centre (inside the object).
+  double origin_offset_m = 0.02;
+  void Check() const;
+};
+
+// One model build. `mesh` is empty when the frame could not be modelled (`why` says why:
+// no depth, no texture, nothing left of the object); never an empty mesh.
+struct ModelBuild {
+  std::optional<Mesh> mesh;
+  std::string why;
+  DepthMap depth;          // the reference camera's depth map
+  cv::Mat mask;            // the object's pixels used (CV_8UC1)
+  PixelRect region;        // the region the depth was measured in
+  SegmentationReport segmentation;
+  SurfaceMeshReport report;
+  double depth_ms = 0.0, mesh_ms = 0.0;
+  bool ok() const { return mesh.has_value(); }
+};
+
+class Modeller {
+ public:
+  // Throws unseen::Error for invalid options, a reference camera not in the rig, or a
+  // depth source the rig cannot serve (DepthSource).
+  Modeller(const Rig& rig, int reference, const ModellerOptions& options);
+
+  // The model of the object seen from the reference camera in the frame `world_from_obj`.
+  // `region`: where the object is in the reference image; empty: the rectangle of the
+  // sphere of segmentation.max_radius_m about the origin. `mask` (optional, CV_8UC1 of the
+  // reference camera's size): non-zero where the object may be.
+  ModelBuild Build(const Frame& frame, const Rigid3d& world_from_obj, const PixelRect& region,
+                   const cv::Mat& mask = cv::Mat()) const;
+
+  // SPEC 4.4: the object frame for a region of the reference image: the centre of the
+  // region back-projected to the median depth measured in it (inside `mask` if given),
+  // origin_offset_m deeper; axes the reference camera's. std::nullopt when nothing in the
+  // region has depth.
+  std::optional<Rigid3d> InitialPose(const Frame& frame, const PixelRect& region,
+                                     const cv::Mat& mask = cv::Mat()) const;
+
+  const ModellerOptions& options() const { return options_; }
+  int reference() const { return reference_; }
+
+ private:
+  Rig rig_;
+  int reference_;
+  ModellerOptions options_;
+  std::unique_ptr<DepthSource> source_;
+};
+
+}  // namespace unseen

@@ -1,0 +1,158 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/model/modeller.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "unseen/model/test_rig_scene.h"
+#include "unseen/render/rasterizer.h"
+#include "unseen/track/tracker.h"
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+using testing::MakeRigScene;
+using testing::RigScene;
+
+constexpr double kDeg = M_PI / 180.0;
+
+class ModellerScene : public ::testing::TestWithParam<DepthSourceKind> {
+ protected:
+  static void SetUpTestSuite() { scene_ = new RigScene(MakeRigScene()); }
+  static void TearDownTestSuite() {
+    delete scene_;
+    scene_ = nullptr;
+  }
+  static PixelRect ObjectRegion(int margin) {
+    const cv::Rect box = cv::boundingRect(scene_->object_masks[0]);
+    return PixelRect{box.x, box.y, box.x + box.width, box.y + box.height}.Grow(margin);
+  }
+  static RigScene* scene_;
+};
+RigScene* ModellerScene::scene_ = nullptr;
+
+// Built at the true object frame from the object's region (the wall behind it included),
+// the model lies on the cube, covers most of it, and tracks it: from a pose 8 mm and 3 deg
+// off, aligning the model to the frame returns to the truth.
+TEST_P(ModellerScene, BuildsATrackableModelOfTheObjectOnly) {
+  const RigScene& s = *scene_;
+  ModellerOptions options;
+  options.depth.source = GetParam();
+  const Modeller modeller(s.rig, 0, options);
+  const ModelBuild build = modeller.Build(s.frame, s.world_from_obj, ObjectRegion(20));
+  ASSERT_TRUE(build.ok()) << build.why;
+  const Mesh& mesh = *build.mesh;
+  EXPECT_GT(mesh.num_triangles(), 30);
+  EXPECT_EQ(build.report.triangles, mesh.num_triangles());
+  std::vector<double> off;
+  for (const Eigen::Vector3f& v : mesh.vertices) {
+    off.push_back(std::abs(v.cwiseAbs().maxCoeff() - 0.05));
+  }
+  std::sort(off.begin(), off.end());
+  EXPECT_LT(off[off.size() / 2], 0.004);
+  EXPECT_LT(off[off.size() * 9 / 10], 0.012);
+  const RigCamera& cam = s.rig.cameras[0];
+  RenderBuffers r;
+  Render(mesh, cam.intrinsics, cam.cam_from_world() * s.world_from_obj, cam.intrinsics.ImageRect(),
+         RenderOptions(), &r);
+  cv::Mat covered;
+  cv::bitwise_and(r.mask, s.object_masks[0], covered);
+  EXPECT_GT(cv::countNonZero(covered), 0.5 * cv::countNonZero(s.object_masks[0]));
+
+  Rig one;
+  one.cameras.push_back(cam);
+  Tracker tracker(one, mesh);
+  const Rigid3d start(Eigen::AngleAxisd(3 * kDeg, Eigen::Vector3d(1, 1, 0).normalized()) *
+                          s.world_from_obj.rotation(),
+                      s.world_from_obj.translation() + Eigen::Vector3d(0.006, -0.005, 0.0));
+  const TrackResult aligned = tracker.Align({s.frame.images[0]}, start);
+  const PoseDifference e = Difference(aligned.world_from_obj, s.world_from_obj);
+  EXPECT_LT(e.translation, 0.003) << aligned.BriefReport();
+  EXPECT_LT(e.rotation_rad, 1.0 * kDeg) << aligned.BriefReport();
+}
+
+INSTANTIATE_TEST_SUITE_P(AllSources, ModellerScene,
+                         ::testing::Values(DepthSourceKind::kPlaneSweep, DepthSourceKind::kStereo,
+                                           DepthSourceKind::kSensor),
+                         [](const auto& info) { return ToString(info.param); });
+
+TEST_F(ModellerScene, TheInitialFrameSitsJustBehindTheRegionsSurface) {
+  const RigScene& s = *scene_;
+  ModellerOptions options;
+  options.depth.source = DepthSourceKind::kSensor;
+  const Modeller modeller(s.rig, 0, options);
+  const std::optional<Rigid3d> pose =
+      modeller.InitialPose(s.frame, ObjectRegion(0), s.object_masks[0]);
+  ASSERT_TRUE(pose.has_value());
+  // The camera's axes; about the cube's centre (the visible surface is ~4-5 cm before it).
+  EXPECT_LT(Difference(*pose, Rigid3d(Eigen::Quaterniond::Identity(), pose->translation()))
+                .rotation_rad,
+            1e-9);
+  EXPECT_LT((pose->translation() - s.world_from_obj.translation()).norm(), 0.04);
+  // A region without depth has no initial frame.
+  Frame no_depth = s.frame;
+  no_depth.depths[0] = cv::Mat(s.frame.depths[0].size(), CV_32FC1, cv::Scalar(0));  // not in place
+  EXPECT_FALSE(modeller.InitialPose(no_depth, ObjectRegion(0)).has_value());
+}
+
+TEST_F(ModellerScene, SegmentationKeepsTheObjectAndDropsTheWallAndItsPlane) {
+  const RigScene& s = *scene_;
+  DepthMap map;
+  map.depth = s.frame.depths[0];
+  const PinholeCamera& camera = s.rig.cameras[0].intrinsics;
+  const Eigen::Vector3d origin =
+      (s.rig.cameras[0].cam_from_world() * s.world_from_obj).translation();
+  // A radius that takes in the wall: the wall is the support plane reaching the rim.
+  SegmentationOptions options;
+  options.max_radius_m = 0.6;
+  SegmentationReport report;
+  const cv::Mat mask =
+      SegmentObject(map, camera, ObjectRegion(40), origin, cv::Mat(), options, &report);
+  EXPECT_TRUE(report.dense);
+  EXPECT_TRUE(report.plane_found);
+  EXPECT_GT(report.on_plane, 0);
+  cv::Mat both, either;
+  cv::bitwise_and(mask, s.object_masks[0], both);
+  cv::bitwise_or(mask, s.object_masks[0], either);
+  EXPECT_GT(double(cv::countNonZero(both)) / cv::countNonZero(either), 0.9);
+  // Without the plane, connectivity in depth still separates the cube from the wall.
+  options.remove_support_plane = false;
+  const cv::Mat connected =
+      SegmentObject(map, camera, ObjectRegion(40), origin, cv::Mat(), options, &report);
+  EXPECT_GT(report.unconnected, 0);
+  cv::bitwise_and(connected, s.object_masks[0], both);
+  cv::bitwise_or(connected, s.object_masks[0], either);
+  EXPECT_GT(double(cv::countNonZero(both)) / cv::countNonZero(either), 0.9);
+}
+
+TEST_F(ModellerScene, WhatCannotBeModelledIsAStatusNotAnEmptyModel) {
+  const RigScene& s = *scene_;
+  ModellerOptions options;
+  options.depth.source = DepthSourceKind::kPlaneSweep;
+  const Modeller modeller(s.rig, 0, options);
+  // Behind the camera, or out of its view.
+  const Rigid3d behind(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, 0, -1));
+  ModelBuild b = modeller.Build(s.frame, behind, PixelRect());
+  EXPECT_FALSE(b.ok());
+  EXPECT_FALSE(b.why.empty());
+  const Rigid3d aside(Eigen::Quaterniond::Identity(), Eigen::Vector3d(3, 0, 0.5));
+  b = modeller.Build(s.frame, aside, PixelRect());
+  EXPECT_FALSE(b.ok());
+  // A uniform image: no texture, so no depth from the cameras.
+  Frame blank = s.frame;
+  for (cv::Mat& im : blank.images) im = cv::Mat(im.size(), CV_32FC3, cv::Scalar(0.5, 0.5, 0.5));
+  b = modeller.Build(blank, s.world_from_obj, ObjectRegion(10));
+  EXPECT_FALSE(b.ok());
+  EXPECT_NE(b.why.find("depth"), std::string::npos) << b.why;
+  // A mask of the wrong size is an error.
+  EXPECT_THROW(modeller.Build(s.frame, s.world_from_obj, ObjectRegion(10), cv::Mat::ones(5, 5, CV_8U)),
+               Error);
+}
+
+}  // namespace
+}  // namespace unseen

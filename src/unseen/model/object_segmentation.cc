@@ -1,0 +1,169 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/model/object_segmentation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <random>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <opencv2/imgproc.hpp>
+
+#include "unseen/util/error.h"
+
+namespace unseen {
+
+void SegmentationOptions::Check() const {
+  UNSEEN_CHECK(max_radius_m > 0.0 && std::isfinite(max_radius_m),
+               "segmentation.max_radius_m {} must be > 0", max_radius_m);
+  UNSEEN_CHECK(plane_tolerance_m > 0.0 && std::isfinite(plane_tolerance_m),
+               "segmentation.plane_tolerance_m {} must be > 0", plane_tolerance_m);
+  UNSEEN_CHECK(plane_iterations >= 1 && plane_iterations <= 100000,
+               "segmentation.plane_iterations {} must be in [1, 100000]", plane_iterations);
+  UNSEEN_CHECK(min_plane_share > 0.0 && min_plane_share <= 1.0,
+               "segmentation.min_plane_share {} must be in (0, 1]", min_plane_share);
+  UNSEEN_CHECK(max_depth_step > 0.0 && std::isfinite(max_depth_step),
+               "segmentation.max_depth_step {} must be > 0", max_depth_step);
+  UNSEEN_CHECK(dense_share >= 0.0 && dense_share <= 1.0,
+               "segmentation.dense_share {} must be in [0, 1]", dense_share);
+}
+
+namespace {
+
+struct Plane {
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  double offset = 0.0;  // normal . p + offset = 0
+  double Distance(const Eigen::Vector3d& p) const { return std::abs(normal.dot(p) + offset); }
+};
+
+// The plane through the most of `points` (RANSAC, seeded), if it holds min_share of them
+// and reaches farther than `rim` from `origin` (a support, not a face of the object).
+std::optional<Plane> SupportPlane(const std::vector<Eigen::Vector3d>& points,
+                                  const Eigen::Vector3d& origin, double rim,
+                                  const SegmentationOptions& o) {
+  if (points.size() < 3) return std::nullopt;
+  std::mt19937 rng(12345);
+  std::uniform_int_distribution<size_t> pick(0, points.size() - 1);
+  // Scored on an even subsample of at most 2 000 points.
+  const size_t stride = std::max<size_t>(1, points.size() / 2000);
+  Plane best;
+  int best_inliers = 0;
+  for (int it = 0; it < o.plane_iterations; ++it) {
+    const Eigen::Vector3d& a = points[pick(rng)];
+    const Eigen::Vector3d& b = points[pick(rng)];
+    const Eigen::Vector3d& c = points[pick(rng)];
+    Eigen::Vector3d n = (b - a).cross(c - a);
+    if (n.norm() < 1e-9) continue;
+    Plane p;
+    p.normal = n.normalized();
+    p.offset = -p.normal.dot(a);
+    int inliers = 0;
+    for (size_t i = 0; i < points.size(); i += stride) {
+      inliers += p.Distance(points[i]) < o.plane_tolerance_m ? 1 : 0;
+    }
+    if (inliers > best_inliers) {
+      best_inliers = inliers;
+      best = p;
+    }
+  }
+  const size_t scored = (points.size() + stride - 1) / stride;
+  if (best_inliers < o.min_plane_share * scored) return std::nullopt;
+  for (const Eigen::Vector3d& p : points) {
+    if (best.Distance(p) < o.plane_tolerance_m && (p - origin).norm() > rim) return best;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
+                      const PixelRect& region, const Eigen::Vector3d& origin_in_cam,
+                      const cv::Mat& given_mask, const SegmentationOptions& options,
+                      SegmentationReport* report) {
+  options.Check();
+  const cv::Size size(camera.width, camera.height);
+  UNSEEN_CHECK(depth_map.depth.type() == CV_32FC1 && depth_map.depth.size() == size,
+               "SegmentObject: depth map is {}x{} type {}; expected {}x{} CV_32FC1",
+               depth_map.depth.cols, depth_map.depth.rows, depth_map.depth.type(), size.width,
+               size.height);
+  UNSEEN_CHECK(given_mask.empty() || (given_mask.type() == CV_8UC1 && given_mask.size() == size),
+               "SegmentObject: mask is {}x{} type {}; expected {}x{} CV_8UC1", given_mask.cols,
+               given_mask.rows, given_mask.type(), size.width, size.height);
+  SegmentationReport local;
+  SegmentationReport& rep = report ? *report : local;
+  rep = SegmentationReport();
+  cv::Mat out = cv::Mat::zeros(size, CV_8UC1);
+  const PixelRect r = region.Intersect(camera.ImageRect());
+  if (r.empty()) return out;
+  const cv::Rect rect(r.x0, r.y0, r.width(), r.height());
+  out(rect).setTo(255);
+  if (!given_mask.empty()) out.setTo(0, given_mask == 0);
+  rep.region_pixels = cv::countNonZero(out);
+
+  // The measured points in the region and their distance from the origin.
+  std::vector<Eigen::Vector3d> points;
+  std::vector<cv::Point> pixels;
+  for (int y = r.y0; y < r.y1; ++y) {
+    for (int x = r.x0; x < r.x1; ++x) {
+      if (!out.at<uint8_t>(y, x)) continue;
+      const float z = depth_map.depth.at<float>(y, x);
+      if (!(z > 0.0f)) continue;
+      points.push_back(camera.Unproject(Eigen::Vector2d(x, y), z));
+      pixels.emplace_back(x, y);
+    }
+  }
+  rep.with_depth = static_cast<int>(points.size());
+  rep.dense = rep.region_pixels > 0 && rep.with_depth >= options.dense_share * rep.region_pixels;
+  std::optional<Plane> support;
+  if (options.remove_support_plane) {
+    std::vector<Eigen::Vector3d> near;
+    for (const Eigen::Vector3d& p : points) {
+      if ((p - origin_in_cam).norm() <= options.max_radius_m) near.push_back(p);
+    }
+    support = SupportPlane(near, origin_in_cam, 0.7 * options.max_radius_m, options);
+    rep.plane_found = support.has_value();
+  }
+  // Where the depth is dense, the pixels without depth are not the object's either.
+  if (rep.dense) {
+    out.setTo(0, depth_map.depth <= 0.0f);
+  }
+  for (size_t i = 0; i < points.size(); ++i) {
+    const cv::Point& px = pixels[i];
+    if ((points[i] - origin_in_cam).norm() > options.max_radius_m) {
+      ++rep.beyond_radius;
+      out.at<uint8_t>(px) = 0;
+    } else if (support && support->Distance(points[i]) < options.plane_tolerance_m) {
+      ++rep.on_plane;
+      out.at<uint8_t>(px) = 0;
+    }
+  }
+  if (!rep.dense || cv::countNonZero(out) == 0) return out;
+
+  // Connected in depth to the measured pixel nearest the origin.
+  int seed = -1;
+  double seed_d = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!out.at<uint8_t>(pixels[i])) continue;
+    const double d = (points[i] - origin_in_cam).norm();
+    if (d < seed_d) {
+      seed_d = d;
+      seed = static_cast<int>(i);
+    }
+  }
+  if (seed < 0) return out;
+  cv::Mat flood(size.height + 2, size.width + 2, CV_8UC1, cv::Scalar(1));
+  flood(cv::Rect(1, 1, size.width, size.height)).setTo(0, out);
+  const float step = static_cast<float>(options.max_depth_step * points[seed].z());
+  cv::Mat depth = depth_map.depth.clone();
+  cv::floodFill(depth, flood, pixels[seed], cv::Scalar(0), nullptr, cv::Scalar(step),
+                cv::Scalar(step), 8 | cv::FLOODFILL_MASK_ONLY | (255 << 8));
+  const cv::Mat connected = flood(cv::Rect(1, 1, size.width, size.height)) == 255;
+  const int before = cv::countNonZero(out);
+  out &= connected;
+  rep.unconnected = before - cv::countNonZero(out);
+  return out;
+}
+
+}  // namespace unseen

@@ -1,0 +1,48 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// Segmenting the object of interest for modelling (SPEC 5.5, thesis 3.5): which pixels of
+// the reference image may give the model vertices. The region (the selected region R, or
+// at a rebuild the rectangle of the object's bounding sphere at the tracked pose) and an
+// optional mask (the thresholded interest map, or any mask image) bound it; measured depth
+// narrows it to the object: within max_radius_m of the object's origin (a position
+// interest filter), off the dominant plane that reaches the region's rim (the table or
+// floor the object stands on), and — where the depth is dense, as a sensor's — connected
+// in depth to the surface nearest the origin (not a neighbouring object).
+#pragma once
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "unseen/camera/camera.h"
+#include "unseen/model/depth_extraction.h"
+
+namespace unseen {
+
+struct SegmentationOptions {
+  double max_radius_m = 0.15;       // the object's extent around its origin
+  bool remove_support_plane = true;
+  double plane_tolerance_m = 0.006; // a pixel this close to the support plane is on it
+  int plane_iterations = 200;       // RANSAC hypotheses
+  double min_plane_share = 0.15;    // the plane holds at least this share of the pixels
+  // Neighbouring pixels are connected when their depths differ by less than this share
+  // of the depth; the connectivity applies where at least dense_share of the region's
+  // pixels have depth.
+  double max_depth_step = 0.03;
+  double dense_share = 0.5;
+  void Check() const;
+};
+
+struct SegmentationReport {
+  int region_pixels = 0, with_depth = 0, on_plane = 0, beyond_radius = 0, unconnected = 0;
+  bool plane_found = false, dense = false;
+};
+
+// CV_8UC1 of the camera's size, 255 on the object's pixels. `origin_in_cam`: the object
+// frame's origin in the camera (inside or just behind the visible surface); `given_mask`
+// (empty: none) CV_8UC1, non-zero where the object may be. Deterministic (seeded RANSAC).
+cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
+                      const PixelRect& region, const Eigen::Vector3d& origin_in_cam,
+                      const cv::Mat& given_mask, const SegmentationOptions& options,
+                      SegmentationReport* report = nullptr);
+
+}  // namespace unseen
