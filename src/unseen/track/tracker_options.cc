@@ -2,12 +2,12 @@
 #include "unseen/track/tracker_options.h"
 
 #include <cmath>
-#include <functional>
 #include <map>
 
 #include <yaml-cpp/yaml.h>
 
 #include "unseen/util/error.h"
+#include "unseen/util/yaml_options.h"
 
 namespace unseen {
 
@@ -159,54 +159,6 @@ void PhotometricOptions::Check() const {
 
 namespace {
 
-using Setter = std::function<void(const YAML::Node&, const std::string&)>;
-
-template <typename T>
-Setter Field(T* field) {
-  return [field](const YAML::Node& node, const std::string& where) {
-    try {
-      *field = node.as<T>();
-    } catch (const YAML::Exception&) {
-      ThrowError("{}: value '{}' has the wrong type", where, YAML::Dump(node));
-    }
-  };
-}
-
-template <typename E>
-Setter EnumField(E* field, E (*parse)(const std::string&, const std::string&)) {
-  return [field, parse](const YAML::Node& node, const std::string& where) {
-    std::string text;
-    try {
-      text = node.as<std::string>();
-    } catch (const YAML::Exception&) {
-      ThrowError("{}: value '{}' is not a string", where, YAML::Dump(node));
-    }
-    *field = parse(text, where);
-  };
-}
-
-// A map key as text. Throws naming `where` for a key that is not a plain name (YAML allows
-// lists and maps as keys: "? [a, b]: 1").
-std::string KeyName(const YAML::Node& key, const std::string& where) {
-  UNSEEN_CHECK(key.IsScalar(), "{}: key '{}' is not a plain name", where, YAML::Dump(key));
-  return key.Scalar();
-}
-
-void ApplySection(const YAML::Node& node, const std::string& where,
-                  const std::map<std::string, Setter>& fields) {
-  UNSEEN_CHECK(node.IsMap(), "{}: expected a map of settings", where);
-  for (const auto& kv : node) {
-    const std::string key = KeyName(kv.first, where);
-    const auto it = fields.find(key);
-    if (it == fields.end()) {
-      std::string known;
-      for (const auto& f : fields) known += (known.empty() ? "" : ", ") + f.first;
-      ThrowError("{}: unknown key '{}' (known: {})", where, key, known);
-    }
-    it->second(kv.second, where + "." + key);
-  }
-}
-
 void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
   if (root.IsNull()) return;
   PreprocessOptions& pp = o->preprocess;
@@ -221,180 +173,180 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
   PhotometricOptions& ph = o->photometric;
   LiveAppearanceOptions& la = o->live_appearance;
   SimplifyOptions& si = o->simplify;
-  const std::map<std::string, std::map<std::string, Setter>> sections = {
+  const std::map<std::string, YamlSection> sections = {
       {"photometric",
-       {{"enabled", Field(&ph.enabled)},
-        {"require_appearance", Field(&ph.require_appearance)},
-        {"min_start_fit", Field(&ph.min_start_fit)},
-        {"start_drag_px", Field(&ph.start_drag_px)},
-        {"start_drag_ratio", Field(&ph.start_drag_ratio)},
-        {"dragged_weight", Field(&ph.dragged_weight)},
-        {"light_change_fit", Field(&ph.light_change_fit)},
-        {"light_change_max_gathering", Field(&ph.light_change_max_gathering)},
-        {"weight", Field(&ph.weight)}}},
+       {{"enabled", YamlField(&ph.enabled)},
+        {"require_appearance", YamlField(&ph.require_appearance)},
+        {"min_start_fit", YamlField(&ph.min_start_fit)},
+        {"start_drag_px", YamlField(&ph.start_drag_px)},
+        {"start_drag_ratio", YamlField(&ph.start_drag_ratio)},
+        {"dragged_weight", YamlField(&ph.dragged_weight)},
+        {"light_change_fit", YamlField(&ph.light_change_fit)},
+        {"light_change_max_gathering", YamlField(&ph.light_change_max_gathering)},
+        {"weight", YamlField(&ph.weight)}}},
       {"preprocess",
-       {{"use_linf", Field(&pp.use_linf)},
-        {"linf_sigma_px", Field(&pp.linf_sigma_px)},
-        {"min_linf_sigma_px", Field(&pp.min_linf_sigma_px)},
-        {"linf_epsilon", Field(&pp.linf_epsilon)},
-        {"blur_sigma_px", Field(&pp.blur_sigma_px)},
-        {"shading_transfer", Field(&pp.shading_transfer)},
-        {"shading_sigma_px", Field(&pp.shading_sigma_px)},
-        {"silhouette_gamma", Field(&pp.silhouette_gamma)}}},
+       {{"use_linf", YamlField(&pp.use_linf)},
+        {"linf_sigma_px", YamlField(&pp.linf_sigma_px)},
+        {"min_linf_sigma_px", YamlField(&pp.min_linf_sigma_px)},
+        {"linf_epsilon", YamlField(&pp.linf_epsilon)},
+        {"blur_sigma_px", YamlField(&pp.blur_sigma_px)},
+        {"shading_transfer", YamlField(&pp.shading_transfer)},
+        {"shading_sigma_px", YamlField(&pp.shading_sigma_px)},
+        {"silhouette_gamma", YamlField(&pp.silhouette_gamma)}}},
       {"selection",
-       {{"color_mode", EnumField(&se.color_mode, &ParseColorMode)},
-        {"use_gradient_threshold", Field(&se.use_gradient_threshold)},
-        {"min_gradient_sq", Field(&se.min_gradient_sq)},
-        {"use_normal_flow_bound", Field(&se.use_normal_flow_bound)},
-        {"max_normal_flow_px", Field(&se.max_normal_flow_px)},
-        {"use_occlusion_rejection", Field(&se.use_occlusion_rejection)},
-        {"occlusion_min_gradient_sq", Field(&se.occlusion_min_gradient_sq)},
-        {"occlusion_max_angle_rad", Field(&se.occlusion_max_angle_rad)},
-        {"occlusion_max_magnitude_diff", Field(&se.occlusion_max_magnitude_diff)},
-        {"min_eigen_ratio", Field(&se.min_eigen_ratio)},
-        {"block_px", Field(&se.block_px)},
-        {"block_min_gradient", Field(&se.block_min_gradient)},
-        {"block_min_share_ratio", Field(&se.block_min_share_ratio)},
-        {"block_min_blocks", Field(&se.block_min_blocks)}}},
+       {{"color_mode", YamlEnumField(&se.color_mode, &ParseColorMode)},
+        {"use_gradient_threshold", YamlField(&se.use_gradient_threshold)},
+        {"min_gradient_sq", YamlField(&se.min_gradient_sq)},
+        {"use_normal_flow_bound", YamlField(&se.use_normal_flow_bound)},
+        {"max_normal_flow_px", YamlField(&se.max_normal_flow_px)},
+        {"use_occlusion_rejection", YamlField(&se.use_occlusion_rejection)},
+        {"occlusion_min_gradient_sq", YamlField(&se.occlusion_min_gradient_sq)},
+        {"occlusion_max_angle_rad", YamlField(&se.occlusion_max_angle_rad)},
+        {"occlusion_max_magnitude_diff", YamlField(&se.occlusion_max_magnitude_diff)},
+        {"min_eigen_ratio", YamlField(&se.min_eigen_ratio)},
+        {"block_px", YamlField(&se.block_px)},
+        {"block_min_gradient", YamlField(&se.block_min_gradient)},
+        {"block_min_share_ratio", YamlField(&se.block_min_share_ratio)},
+        {"block_min_blocks", YamlField(&se.block_min_blocks)}}},
       {"solver",
-       {{"kernel", EnumField(&so.kernel, &ParseRobustKernel)},
-        {"kernel_width", Field(&so.kernel_width)},
-        {"irls_iterations", Field(&so.irls_iterations)},
-        {"min_scale_px", Field(&so.min_scale_px)},
-        {"min_equations", Field(&so.min_equations)},
-        {"damping", Field(&so.damping)}}},
+       {{"kernel", YamlEnumField(&so.kernel, &ParseRobustKernel)},
+        {"kernel_width", YamlField(&so.kernel_width)},
+        {"irls_iterations", YamlField(&so.irls_iterations)},
+        {"min_scale_px", YamlField(&so.min_scale_px)},
+        {"min_equations", YamlField(&so.min_equations)},
+        {"damping", YamlField(&so.damping)}}},
       {"pyramid",
-       {{"max_levels", Field(&py.max_levels)},
-        {"min_object_px", Field(&py.min_object_px)},
-        {"max_iterations_per_level", Field(&py.max_iterations_per_level)},
-        {"min_update_px", Field(&py.min_update_px)},
-        {"coarse_max_iterations", Field(&py.coarse_max_iterations)},
-        {"coarse_min_update_px", Field(&py.coarse_min_update_px)},
-        {"max_step_px", Field(&py.max_step_px)},
-        {"resample_iterations", Field(&py.resample_iterations)},
-        {"rerender_px", Field(&py.rerender_px)},
-        {"resample_margin_px", Field(&py.resample_margin_px)},
-        {"rim_px", Field(&py.rim_px)},
-        {"supersampled_levels", Field(&py.supersampled_levels)},
-        {"adaptive_levels", Field(&py.adaptive_levels)},
-        {"min_adaptive_levels", Field(&py.min_adaptive_levels)},
-        {"capture_px", Field(&py.capture_px)},
-        {"prediction_margin", Field(&py.prediction_margin)},
-        {"correction_decay", Field(&py.correction_decay)}}},
+       {{"max_levels", YamlField(&py.max_levels)},
+        {"min_object_px", YamlField(&py.min_object_px)},
+        {"max_iterations_per_level", YamlField(&py.max_iterations_per_level)},
+        {"min_update_px", YamlField(&py.min_update_px)},
+        {"coarse_max_iterations", YamlField(&py.coarse_max_iterations)},
+        {"coarse_min_update_px", YamlField(&py.coarse_min_update_px)},
+        {"max_step_px", YamlField(&py.max_step_px)},
+        {"resample_iterations", YamlField(&py.resample_iterations)},
+        {"rerender_px", YamlField(&py.rerender_px)},
+        {"resample_margin_px", YamlField(&py.resample_margin_px)},
+        {"rim_px", YamlField(&py.rim_px)},
+        {"supersampled_levels", YamlField(&py.supersampled_levels)},
+        {"adaptive_levels", YamlField(&py.adaptive_levels)},
+        {"min_adaptive_levels", YamlField(&py.min_adaptive_levels)},
+        {"capture_px", YamlField(&py.capture_px)},
+        {"prediction_margin", YamlField(&py.prediction_margin)},
+        {"correction_decay", YamlField(&py.correction_decay)}}},
       {"predictor",
-       {{"type", EnumField(&pr.type, &ParsePredictorType)},
-        {"linear_accel_sigma", Field(&pr.linear_accel_sigma)},
-        {"angular_accel_sigma", Field(&pr.angular_accel_sigma)},
-        {"position_sigma", Field(&pr.position_sigma)},
-        {"rotation_sigma", Field(&pr.rotation_sigma)},
-        {"min_confidence", Field(&pr.min_confidence)},
-        {"confidence_power", Field(&pr.confidence_power)}}},
+       {{"type", YamlEnumField(&pr.type, &ParsePredictorType)},
+        {"linear_accel_sigma", YamlField(&pr.linear_accel_sigma)},
+        {"angular_accel_sigma", YamlField(&pr.angular_accel_sigma)},
+        {"position_sigma", YamlField(&pr.position_sigma)},
+        {"rotation_sigma", YamlField(&pr.rotation_sigma)},
+        {"min_confidence", YamlField(&pr.min_confidence)},
+        {"confidence_power", YamlField(&pr.confidence_power)}}},
       {"failure",
-       {{"min_share", Field(&fa.min_share)},
-        {"good_share", Field(&fa.good_share)},
-        {"min_used_px", Field(&fa.min_used_px)},
-        {"good_used_px", Field(&fa.good_used_px)},
-        {"good_residual_px", Field(&fa.good_residual_px)},
-        {"good_residual_ratio", Field(&fa.good_residual_ratio)},
-        {"bad_residual_ratio", Field(&fa.bad_residual_ratio)},
-        {"residual_reference_rate", Field(&fa.residual_reference_rate)},
-        {"min_reference_residual_px", Field(&fa.min_reference_residual_px)},
-        {"bad_residual_px", Field(&fa.bad_residual_px)},
-        {"good_update_px", Field(&fa.good_update_px)},
-        {"bad_update_px", Field(&fa.bad_update_px)},
-        {"min_pixels", Field(&fa.min_pixels)},
-        {"good_region_residual_ratio", Field(&fa.good_region_residual_ratio)},
-        {"bad_region_residual_ratio", Field(&fa.bad_region_residual_ratio)},
-        {"min_reference_region_residual", Field(&fa.min_reference_region_residual)},
-        {"min_region_lines", Field(&fa.min_region_lines)},
-        {"min_area_ratio", Field(&fa.min_area_ratio)},
-        {"good_area_ratio", Field(&fa.good_area_ratio)},
-        {"area_memory_frames", Field(&fa.area_memory_frames)},
-        {"lost_confidence", Field(&fa.lost_confidence)},
-        {"lost_after_frames", Field(&fa.lost_after_frames)},
-        {"recover_confidence", Field(&fa.recover_confidence)},
-        {"search_when_lost", Field(&fa.search_when_lost)},
-        {"coast_frames", Field(&fa.coast_frames)},
-        {"search_offset", Field(&fa.search_offset)}}},
+       {{"min_share", YamlField(&fa.min_share)},
+        {"good_share", YamlField(&fa.good_share)},
+        {"min_used_px", YamlField(&fa.min_used_px)},
+        {"good_used_px", YamlField(&fa.good_used_px)},
+        {"good_residual_px", YamlField(&fa.good_residual_px)},
+        {"good_residual_ratio", YamlField(&fa.good_residual_ratio)},
+        {"bad_residual_ratio", YamlField(&fa.bad_residual_ratio)},
+        {"residual_reference_rate", YamlField(&fa.residual_reference_rate)},
+        {"min_reference_residual_px", YamlField(&fa.min_reference_residual_px)},
+        {"bad_residual_px", YamlField(&fa.bad_residual_px)},
+        {"good_update_px", YamlField(&fa.good_update_px)},
+        {"bad_update_px", YamlField(&fa.bad_update_px)},
+        {"min_pixels", YamlField(&fa.min_pixels)},
+        {"good_region_residual_ratio", YamlField(&fa.good_region_residual_ratio)},
+        {"bad_region_residual_ratio", YamlField(&fa.bad_region_residual_ratio)},
+        {"min_reference_region_residual", YamlField(&fa.min_reference_region_residual)},
+        {"min_region_lines", YamlField(&fa.min_region_lines)},
+        {"min_area_ratio", YamlField(&fa.min_area_ratio)},
+        {"good_area_ratio", YamlField(&fa.good_area_ratio)},
+        {"area_memory_frames", YamlField(&fa.area_memory_frames)},
+        {"lost_confidence", YamlField(&fa.lost_confidence)},
+        {"lost_after_frames", YamlField(&fa.lost_after_frames)},
+        {"recover_confidence", YamlField(&fa.recover_confidence)},
+        {"search_when_lost", YamlField(&fa.search_when_lost)},
+        {"coast_frames", YamlField(&fa.coast_frames)},
+        {"search_offset", YamlField(&fa.search_offset)}}},
       {"reacquisition",
-       {{"use_correlation", Field(&re.use_correlation)},
-        {"seed_object_px", Field(&re.seed_object_px)},
-        {"search_radii", Field(&re.search_radii)},
-        {"min_correlation", Field(&re.min_correlation)},
-        {"max_seeds", Field(&re.max_seeds)},
-        {"rotation_deg", Field(&re.rotation_deg)},
-        {"max_candidates", Field(&re.max_candidates)},
-        {"score_iterations", Field(&re.score_iterations)},
-        {"score_levels", Field(&re.score_levels)},
-        {"refine_candidates", Field(&re.refine_candidates)},
-        {"min_score", Field(&re.min_score)},
-        {"seed_when_doubtful", Field(&re.seed_when_doubtful)},
-        {"doubtful_confidence", Field(&re.doubtful_confidence)},
-        {"min_seed_shift_px", Field(&re.min_seed_shift_px)}}},
+       {{"use_correlation", YamlField(&re.use_correlation)},
+        {"seed_object_px", YamlField(&re.seed_object_px)},
+        {"search_radii", YamlField(&re.search_radii)},
+        {"min_correlation", YamlField(&re.min_correlation)},
+        {"max_seeds", YamlField(&re.max_seeds)},
+        {"rotation_deg", YamlField(&re.rotation_deg)},
+        {"max_candidates", YamlField(&re.max_candidates)},
+        {"score_iterations", YamlField(&re.score_iterations)},
+        {"score_levels", YamlField(&re.score_levels)},
+        {"refine_candidates", YamlField(&re.refine_candidates)},
+        {"min_score", YamlField(&re.min_score)},
+        {"seed_when_doubtful", YamlField(&re.seed_when_doubtful)},
+        {"doubtful_confidence", YamlField(&re.doubtful_confidence)},
+        {"min_seed_shift_px", YamlField(&re.min_seed_shift_px)}}},
       {"depth",
-       {{"enabled", Field(&de.enabled)},
-        {"max_points", Field(&de.max_points)},
-        {"max_distance_m", Field(&de.max_distance_m)},
-        {"kernel", EnumField(&de.residual.kernel, &ParseRobustKernel)},
-        {"kernel_width", Field(&de.residual.kernel_width)},
-        {"min_scale_m", Field(&de.residual.min_scale)},
-        {"min_noise_m", Field(&de.residual.min_noise)},
-        {"max_noise_m", Field(&de.residual.max_noise)},
-        {"damping", Field(&de.residual.damping)},
-        {"weight", Field(&de.residual.weight)},
-        {"agree_distance_m", Field(&de.agree_distance_m)},
-        {"bad_agreement", Field(&de.bad_agreement)},
-        {"good_agreement", Field(&de.good_agreement)},
-        {"min_measured", Field(&de.min_measured)},
-        {"max_hidden_share", Field(&de.max_hidden_share)}}},
+       {{"enabled", YamlField(&de.enabled)},
+        {"max_points", YamlField(&de.max_points)},
+        {"max_distance_m", YamlField(&de.max_distance_m)},
+        {"kernel", YamlEnumField(&de.residual.kernel, &ParseRobustKernel)},
+        {"kernel_width", YamlField(&de.residual.kernel_width)},
+        {"min_scale_m", YamlField(&de.residual.min_scale)},
+        {"min_noise_m", YamlField(&de.residual.min_noise)},
+        {"max_noise_m", YamlField(&de.residual.max_noise)},
+        {"damping", YamlField(&de.residual.damping)},
+        {"weight", YamlField(&de.residual.weight)},
+        {"agree_distance_m", YamlField(&de.agree_distance_m)},
+        {"bad_agreement", YamlField(&de.bad_agreement)},
+        {"good_agreement", YamlField(&de.good_agreement)},
+        {"min_measured", YamlField(&de.min_measured)},
+        {"max_hidden_share", YamlField(&de.max_hidden_share)}}},
       {"region",
-       {{"enabled", Field(&rg.enabled)},
-        {"bins_per_channel", Field(&rg.bins_per_channel)},
-        {"max_lines", Field(&rg.max_lines)},
-        {"line_px", Field(&rg.line_px)},
-        {"learn_margin_px", Field(&rg.learn_margin_px)},
-        {"learn_rate", Field(&rg.learn_rate)},
-        {"min_sigma_px", Field(&rg.min_sigma_px)},
-        {"max_sigma_px", Field(&rg.max_sigma_px)},
-        {"min_contrast", Field(&rg.min_contrast)},
-        {"kernel", EnumField(&rg.residual.kernel, &ParseRobustKernel)},
-        {"kernel_width", Field(&rg.residual.kernel_width)},
-        {"min_scale", Field(&rg.residual.min_scale)},
-        {"min_noise", Field(&rg.residual.min_noise)},
-        {"max_noise", Field(&rg.residual.max_noise)},
-        {"damping", Field(&rg.residual.damping)},
-        {"weight", Field(&rg.residual.weight)},
-        {"bad_agreement", Field(&rg.bad_agreement)},
-        {"good_agreement", Field(&rg.good_agreement)},
-        {"min_start_edge_share", Field(&rg.min_start_edge_share)}}},
+       {{"enabled", YamlField(&rg.enabled)},
+        {"bins_per_channel", YamlField(&rg.bins_per_channel)},
+        {"max_lines", YamlField(&rg.max_lines)},
+        {"line_px", YamlField(&rg.line_px)},
+        {"learn_margin_px", YamlField(&rg.learn_margin_px)},
+        {"learn_rate", YamlField(&rg.learn_rate)},
+        {"min_sigma_px", YamlField(&rg.min_sigma_px)},
+        {"max_sigma_px", YamlField(&rg.max_sigma_px)},
+        {"min_contrast", YamlField(&rg.min_contrast)},
+        {"kernel", YamlEnumField(&rg.residual.kernel, &ParseRobustKernel)},
+        {"kernel_width", YamlField(&rg.residual.kernel_width)},
+        {"min_scale", YamlField(&rg.residual.min_scale)},
+        {"min_noise", YamlField(&rg.residual.min_noise)},
+        {"max_noise", YamlField(&rg.residual.max_noise)},
+        {"damping", YamlField(&rg.residual.damping)},
+        {"weight", YamlField(&rg.residual.weight)},
+        {"bad_agreement", YamlField(&rg.bad_agreement)},
+        {"good_agreement", YamlField(&rg.good_agreement)},
+        {"min_start_edge_share", YamlField(&rg.min_start_edge_share)}}},
       {"live_appearance",
-       {{"enabled", Field(&la.enabled)},
-        {"always", Field(&la.always)},
-        {"min_confidence", Field(&la.min_confidence)},
-        {"refresh_frames", Field(&la.refresh_frames)},
-        {"margin_px", Field(&la.margin_px)},
-        {"occlusion_tolerance", Field(&la.occlusion_tolerance)},
-        {"photometric_weight", Field(&la.photometric_weight)},
-        {"poor_fit_share", Field(&la.poor_fit_share)},
-        {"poor_fit_frames", Field(&la.poor_fit_frames)},
-        {"poor_fit_best_share", Field(&la.poor_fit_best_share)},
-        {"poor_fit_confidence", Field(&la.poor_fit_confidence)}}},
+       {{"enabled", YamlField(&la.enabled)},
+        {"always", YamlField(&la.always)},
+        {"min_confidence", YamlField(&la.min_confidence)},
+        {"refresh_frames", YamlField(&la.refresh_frames)},
+        {"margin_px", YamlField(&la.margin_px)},
+        {"occlusion_tolerance", YamlField(&la.occlusion_tolerance)},
+        {"photometric_weight", YamlField(&la.photometric_weight)},
+        {"poor_fit_share", YamlField(&la.poor_fit_share)},
+        {"poor_fit_frames", YamlField(&la.poor_fit_frames)},
+        {"poor_fit_best_share", YamlField(&la.poor_fit_best_share)},
+        {"poor_fit_confidence", YamlField(&la.poor_fit_confidence)}}},
       {"simplify",
-       {{"enabled", Field(&si.enabled)},
-        {"max_normal_angle_rad", Field(&si.max_normal_angle_rad)},
-        {"relative_tolerance", Field(&si.relative_tolerance)},
-        {"attribute_tolerance", Field(&si.attribute_tolerance)},
-        {"texture_shift_tolerance", Field(&si.texture_shift_tolerance)}}},
+       {{"enabled", YamlField(&si.enabled)},
+        {"max_normal_angle_rad", YamlField(&si.max_normal_angle_rad)},
+        {"relative_tolerance", YamlField(&si.relative_tolerance)},
+        {"attribute_tolerance", YamlField(&si.attribute_tolerance)},
+        {"texture_shift_tolerance", YamlField(&si.texture_shift_tolerance)}}},
   };
   UNSEEN_CHECK(root.IsMap(), "{}: expected a map at the top level", what);
   for (const auto& kv : root) {
-    const std::string key = KeyName(kv.first, what);
+    const std::string key = YamlKeyName(kv.first, what);
     if (key == "frame_interval_s") {
-      Field(&o->frame_interval_s)(kv.second, what + ": " + key);
+      YamlField(&o->frame_interval_s)(kv.second, what + ": " + key);
       continue;
     }
     if (key == "threads") {
-      Field(&o->threads)(kv.second, what + ": " + key);
+      YamlField(&o->threads)(kv.second, what + ": " + key);
       continue;
     }
     const auto it = sections.find(key);
@@ -405,7 +357,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
                  "frame_interval_s, threads)",
                  what, key);
     }
-    ApplySection(kv.second, what + ": " + key, it->second);
+    ApplyYamlSection(kv.second, what + ": " + key, it->second);
   }
 }
 
@@ -429,14 +381,7 @@ TrackerOptions ParseTrackerOptions(const std::string& yaml_text, const std::stri
 }
 
 TrackerOptions LoadTrackerOptions(const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    ThrowError("{}: cannot read the tracker options file", path);
-  } catch (const YAML::Exception& e) {
-    ThrowError("{}: malformed YAML: {}", path, e.what());
-  }
+  const YAML::Node root = LoadYamlFile(path, "tracker options");
   TrackerOptions options;
   Apply(root, path, &options);
   try {
