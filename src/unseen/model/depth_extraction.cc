@@ -2,7 +2,6 @@
 #include "unseen/model/depth_extraction.h"
 
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 #include "unseen/image/image_io.h"
@@ -14,9 +13,12 @@ namespace unseen {
 
 std::string ToString(DepthSourceKind kind) {
   switch (kind) {
-    case DepthSourceKind::kPlaneSweep: return "planesweep";
-    case DepthSourceKind::kStereo: return "stereo";
-    case DepthSourceKind::kSensor: return "sensor";
+    case DepthSourceKind::kPlaneSweep:
+      return "planesweep";
+    case DepthSourceKind::kStereo:
+      return "stereo";
+    case DepthSourceKind::kSensor:
+      return "sensor";
   }
   return "?";
 }
@@ -57,8 +59,8 @@ void StereoOptions::Check() const {
 }
 
 void DepthExtractionOptions::Check() const {
-  UNSEEN_CHECK(min_depth_m > 0.0 && std::isfinite(min_depth_m),
-               "depth.min_depth_m {} must be > 0", min_depth_m);
+  UNSEEN_CHECK(min_depth_m > 0.0 && std::isfinite(min_depth_m), "depth.min_depth_m {} must be > 0",
+               min_depth_m);
   UNSEEN_CHECK(max_depth_m > min_depth_m && std::isfinite(max_depth_m),
                "depth.max_depth_m {} must be > min_depth_m {}", max_depth_m, min_depth_m);
   UNSEEN_CHECK(min_texturedness >= 0.0 && std::isfinite(min_texturedness),
@@ -90,7 +92,8 @@ cv::Mat GreyImage(const Frame& frame, const Rig& rig, int camera, const std::str
   UNSEEN_CHECK(im.cols == cam.intrinsics.width && im.rows == cam.intrinsics.height,
                "depth source {}: image of camera '{}' is {}x{}, the camera is {}x{}", source,
                cam.name, im.cols, im.rows, cam.intrinsics.width, cam.intrinsics.height);
-  const cv::Mat bgr = im.type() == CV_32FC3 ? im : ToFloatBgr(im, "camera '" + cam.name + "' image");
+  const cv::Mat bgr =
+      im.type() == CV_32FC3 ? im : ToFloatBgr(im, "camera '" + cam.name + "' image");
   cv::Mat grey;
   cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
   return grey;
@@ -107,28 +110,28 @@ class SensorDepth : public DepthSource {
   DepthMap Extract(const Frame& frame, const PixelRect& roi, double near_m,
                    double far_m) const override {
     const RigCamera& cam = rig_.cameras[reference_];
-    UNSEEN_CHECK(static_cast<int>(frame.images.size()) == rig_.size() &&
-                     !frame.images[reference_].empty(),
-                 "depth source sensor: no colour image of camera '{}' in frame {}", cam.name,
-                 frame.frame_id);
-    UNSEEN_CHECK(static_cast<int>(frame.depths.size()) == rig_.size() &&
-                     !frame.depths[reference_].empty(),
-                 "depth source sensor: frame {} has no depth image of camera '{}' (the "
-                 "sequence has no depth; use --depth planesweep or stereo)",
-                 frame.frame_id, cam.name);
+    UNSEEN_CHECK(
+        static_cast<int>(frame.images.size()) == rig_.size() && !frame.images[reference_].empty(),
+        "depth source sensor: no colour image of camera '{}' in frame {}", cam.name,
+        frame.frame_id);
+    UNSEEN_CHECK(
+        static_cast<int>(frame.depths.size()) == rig_.size() && !frame.depths[reference_].empty(),
+        "depth source sensor: frame {} has no depth image of camera '{}' (the "
+        "sequence has no depth; use --depth planesweep or stereo)",
+        frame.frame_id, cam.name);
     const cv::Mat& d = frame.depths[reference_];
-    UNSEEN_CHECK(d.type() == CV_32FC1 && d.cols == cam.intrinsics.width &&
-                     d.rows == cam.intrinsics.height,
-                 "depth source sensor: depth of camera '{}' is {}x{} type {}; expected {}x{} "
-                 "CV_32FC1 metres",
-                 cam.name, d.cols, d.rows, d.type(), cam.intrinsics.width, cam.intrinsics.height);
+    UNSEEN_CHECK(
+        d.type() == CV_32FC1 && d.cols == cam.intrinsics.width && d.rows == cam.intrinsics.height,
+        "depth source sensor: depth of camera '{}' is {}x{} type {}; expected {}x{} "
+        "CV_32FC1 metres",
+        cam.name, d.cols, d.rows, d.type(), cam.intrinsics.width, cam.intrinsics.height);
     const double near = near_m > 0.0 ? near_m : options_.min_depth_m;
     const double far = far_m > 0.0 ? far_m : options_.max_depth_m;
     DepthMap out;
     out.texturedness = Texturedness(frame.images[reference_]);
     out.depth = cv::Mat::zeros(d.size(), CV_32FC1);
-    const PixelRect r = (roi.empty() ? cam.intrinsics.ImageRect() : roi)
-                            .Intersect(cam.intrinsics.ImageRect());
+    const PixelRect r =
+        (roi.empty() ? cam.intrinsics.ImageRect() : roi).Intersect(cam.intrinsics.ImageRect());
     for (int y = r.y0; y < r.y1; ++y) {
       const float* in = d.ptr<float>(y);
       float* o = out.depth.ptr<float>(y);

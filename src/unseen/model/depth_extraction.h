@@ -11,9 +11,8 @@
 #pragma once
 
 #include <memory>
-#include <string>
-
 #include <opencv2/core.hpp>
+#include <string>
 
 #include "unseen/camera/camera.h"
 #include "unseen/io/sequence.h"
@@ -27,13 +26,13 @@ std::string ToString(DepthSourceKind kind);
 DepthSourceKind ParseDepthSourceKind(const std::string& text);
 
 struct PlaneSweepOptions {
-  int planes = 64;             // fronto-parallel planes, uniform in inverse depth
-  int window_px = 7;           // side of the square window of the ZNCC cost
+  int planes = 64;    // fronto-parallel planes, uniform in inverse depth
+  int window_px = 7;  // side of the square window of the ZNCC cost
   // Cameras whose cost counts at each pixel: the best `best_share` of them, at least two
   // where there are (occlusion: a camera that sees something else there disagrees).
   double best_share = 0.5;
-  double max_cost = 0.6;       // 1 - ZNCC above which a pixel stays unmeasured
-  double uniqueness = 0.05;    // the best cost must beat every non-adjacent plane's by this
+  double max_cost = 0.6;     // 1 - ZNCC above which a pixel stays unmeasured
+  double uniqueness = 0.05;  // the best cost must beat every non-adjacent plane's by this
   // The thesis's refinement: `refine_iterations` passes choosing, per pixel, the plane
   // minimising cost + smoothness * |plane - median of the 3x3 neighbours' planes|.
   int refine_iterations = 2;
@@ -42,18 +41,18 @@ struct PlaneSweepOptions {
 };
 
 struct StereoOptions {
-  int num_disparities = 128;   // multiple of 16 (OpenCV)
-  int block_size = 5;          // odd, >= 3
-  int uniqueness_ratio = 10;   // per cent
-  int speckle_window = 100;    // px; 0 = no speckle filtering
-  int speckle_range = 2;       // disparity units
-  std::string other_camera;    // the second camera; empty: the first that is not the reference
+  int num_disparities = 128;  // multiple of 16 (OpenCV)
+  int block_size = 5;         // odd, >= 3
+  int uniqueness_ratio = 10;  // per cent
+  int speckle_window = 100;   // px; 0 = no speckle filtering
+  int speckle_range = 2;      // disparity units
+  std::string other_camera;   // the second camera; empty: the first that is not the reference
   void Check() const;
 };
 
 struct DepthExtractionOptions {
   DepthSourceKind source = DepthSourceKind::kPlaneSweep;
-  double min_depth_m = 0.1;    // depth range searched / accepted
+  double min_depth_m = 0.1;  // depth range searched / accepted
   double max_depth_m = 5.0;
   // Pixels whose texturedness (3.1) is below this are not measured by the image-based
   // sources (BGR in [0, 1]; a step of 0.1 in every channel across two pixels is 0.0075).

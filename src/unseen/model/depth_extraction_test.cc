@@ -1,11 +1,11 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/model/depth_extraction.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "unseen/model/stereo_depth.h"
 #include "unseen/model/test_rig_scene.h"

@@ -8,10 +8,9 @@
 #pragma once
 
 #include <memory>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
-
-#include <opencv2/core.hpp>
 
 #include "unseen/camera/camera.h"
 #include "unseen/geometry/rigid3.h"
@@ -33,14 +32,20 @@ struct ModellerOptions {
   void Check() const;
 };
 
+// The options from YAML (sections depth, plane_sweep, stereo, segmentation, mesh, model;
+// every key as the structs' fields), checked. Errors name the file (`what`), the section,
+// the key and the value.
+ModellerOptions ParseModellerOptions(const std::string& yaml_text, const std::string& what);
+ModellerOptions LoadModellerOptions(const std::string& path);
+
 // One model build. `mesh` is empty when the frame could not be modelled (`why` says why:
 // no depth, no texture, nothing left of the object); never an empty mesh.
 struct ModelBuild {
   std::optional<Mesh> mesh;
   std::string why;
-  DepthMap depth;          // the reference camera's depth map
-  cv::Mat mask;            // the object's pixels used (CV_8UC1)
-  PixelRect region;        // the region the depth was measured in
+  DepthMap depth;    // the reference camera's depth map
+  cv::Mat mask;      // the object's pixels used (CV_8UC1)
+  PixelRect region;  // the region the depth was measured in
   SegmentationReport segmentation;
   SurfaceMeshReport report;
   double depth_ms = 0.0, mesh_ms = 0.0;

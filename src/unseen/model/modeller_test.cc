@@ -1,12 +1,12 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/model/modeller.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
-#include <vector>
-
-#include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "unseen/model/test_rig_scene.h"
 #include "unseen/render/rasterizer.h"
@@ -90,9 +90,9 @@ TEST_F(ModellerScene, TheInitialFrameSitsJustBehindTheRegionsSurface) {
       modeller.InitialPose(s.frame, ObjectRegion(0), s.object_masks[0]);
   ASSERT_TRUE(pose.has_value());
   // The camera's axes; about the cube's centre (the visible surface is ~4-5 cm before it).
-  EXPECT_LT(Difference(*pose, Rigid3d(Eigen::Quaterniond::Identity(), pose->translation()))
-                .rotation_rad,
-            1e-9);
+  EXPECT_LT(
+      Difference(*pose, Rigid3d(Eigen::Quaterniond::Identity(), pose->translation())).rotation_rad,
+      1e-9);
   EXPECT_LT((pose->translation() - s.world_from_obj.translation()).norm(), 0.04);
   // A region without depth has no initial frame.
   Frame no_depth = s.frame;
@@ -150,8 +150,44 @@ TEST_F(ModellerScene, WhatCannotBeModelledIsAStatusNotAnEmptyModel) {
   EXPECT_FALSE(b.ok());
   EXPECT_NE(b.why.find("depth"), std::string::npos) << b.why;
   // A mask of the wrong size is an error.
-  EXPECT_THROW(modeller.Build(s.frame, s.world_from_obj, ObjectRegion(10), cv::Mat::ones(5, 5, CV_8U)),
-               Error);
+  EXPECT_THROW(
+      modeller.Build(s.frame, s.world_from_obj, ObjectRegion(10), cv::Mat::ones(5, 5, CV_8U)),
+      Error);
+}
+
+TEST(ModellerOptionsYaml, ReadsEverySectionAndNamesWhatIsWrong) {
+  const ModellerOptions o = ParseModellerOptions(
+      "depth: {source: stereo, max_depth_m: 2.5}\n"
+      "stereo: {num_disparities: 64, other_camera: right}\n"
+      "plane_sweep: {planes: 32}\n"
+      "segmentation: {max_radius_m: 0.2, remove_support_plane: false}\n"
+      "mesh: {cell_px: 8, contour_vertices: false}\n"
+      "model: {origin_offset_m: 0.01}\n",
+      "test.yaml");
+  EXPECT_EQ(o.depth.source, DepthSourceKind::kStereo);
+  EXPECT_EQ(o.depth.max_depth_m, 2.5);
+  EXPECT_EQ(o.depth.stereo.num_disparities, 64);
+  EXPECT_EQ(o.depth.stereo.other_camera, "right");
+  EXPECT_EQ(o.depth.plane_sweep.planes, 32);
+  EXPECT_EQ(o.segmentation.max_radius_m, 0.2);
+  EXPECT_FALSE(o.segmentation.remove_support_plane);
+  EXPECT_EQ(o.mesh.cell_px, 8);
+  EXPECT_FALSE(o.mesh.contour_vertices);
+  EXPECT_EQ(o.origin_offset_m, 0.01);
+  auto message = [](const std::string& yaml) {
+    try {
+      ParseModellerOptions(yaml, "bad.yaml");
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("depth: {source: lidar}").find("lidar"), std::string::npos);
+  EXPECT_NE(message("mesh: {cells: 3}").find("cells"), std::string::npos);
+  EXPECT_NE(message("meshes: {}").find("meshes"), std::string::npos);
+  EXPECT_NE(message("mesh: {cell_px: 1}").find("cell_px"), std::string::npos);
+  EXPECT_NE(message("mesh: {cell_px: many}").find("bad.yaml"), std::string::npos);
+  EXPECT_THROW(LoadModellerOptions("/nonexistent/model.yaml"), Error);
 }
 
 }  // namespace

@@ -1,15 +1,14 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/model/object_segmentation.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <random>
 #include <vector>
-
-#include <Eigen/Geometry>
-#include <opencv2/imgproc.hpp>
 
 #include "unseen/util/error.h"
 

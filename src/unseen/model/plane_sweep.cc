@@ -4,9 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <vector>
-
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "unseen/util/error.h"
 
@@ -34,8 +33,8 @@ PlaneSweepDepth::PlaneSweepDepth(const Rig& rig, int reference,
                                  const DepthExtractionOptions& options)
     : rig_(rig), reference_(reference), options_(options) {
   options_.Check();
-  UNSEEN_CHECK(rig_.size() >= 2, "depth source planesweep needs two cameras or more; the rig has {}",
-               rig_.size());
+  UNSEEN_CHECK(rig_.size() >= 2,
+               "depth source planesweep needs two cameras or more; the rig has {}", rig_.size());
 }
 
 DepthMap PlaneSweepDepth::Extract(const Frame& frame, const PixelRect& roi, double near_m,
@@ -64,8 +63,9 @@ DepthMap PlaneSweepDepth::Extract(const Frame& frame, const PixelRect& roi, doub
     others.push_back(c);
     greys.push_back(GreyImage(frame, rig_, c, "planesweep"));
   }
-  UNSEEN_CHECK(!others.empty(), "depth source planesweep: frame {} has no image besides camera '{}'",
-               frame.frame_id, ref.name);
+  UNSEEN_CHECK(!others.empty(),
+               "depth source planesweep: frame {} has no image besides camera '{}'", frame.frame_id,
+               ref.name);
   const int num_others = static_cast<int>(others.size());
   const int num_best = std::clamp(static_cast<int>(std::lround(o.best_share * num_others)),
                                   std::min(2, num_others), num_others);
@@ -150,7 +150,8 @@ DepthMap PlaneSweepDepth::Extract(const Frame& frame, const PixelRect& roi, doub
   for (int i = 0; i < n; ++i) {
     int best = 0;
     for (int k = 1; k < planes; ++k) {
-      if (volume[static_cast<size_t>(k) * n + i] < volume[static_cast<size_t>(best) * n + i]) best = k;
+      if (volume[static_cast<size_t>(k) * n + i] < volume[static_cast<size_t>(best) * n + i])
+        best = k;
     }
     label.at<float>(i / w.width(), i % w.width()) = static_cast<float>(best);
   }

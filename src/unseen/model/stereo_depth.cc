@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -47,12 +46,13 @@ StereoDepth::StereoDepth(const Rig& rig, int reference, const DepthExtractionOpt
   const PinholeCamera& b = rig_.cameras[other_].intrinsics;
   UNSEEN_CHECK(a.width == b.width && a.height == b.height,
                "depth source stereo: cameras '{}' ({}x{}) and '{}' ({}x{}) differ in size",
-               rig_.cameras[reference_].name, a.width, a.height, rig_.cameras[other_].name,
-               b.width, b.height);
+               rig_.cameras[reference_].name, a.width, a.height, rig_.cameras[other_].name, b.width,
+               b.height);
   const double baseline = (rig_.cameras[other_].world_from_cam.translation() -
                            rig_.cameras[reference_].world_from_cam.translation())
                               .norm();
-  UNSEEN_CHECK(baseline > 1e-4, "depth source stereo: cameras '{}' and '{}' share a centre "
+  UNSEEN_CHECK(baseline > 1e-4,
+               "depth source stereo: cameras '{}' and '{}' share a centre "
                "(baseline {} m): no depth from their pair",
                rig_.cameras[reference_].name, rig_.cameras[other_].name, baseline);
 }
@@ -119,7 +119,8 @@ DepthMap StereoDepth::Extract(const Frame& frame, const PixelRect& roi, double n
   }
   const int margin = o.block_size + 2;
   const int row0 = std::clamp(static_cast<int>(std::floor(y_min)) - margin, 0, size.height - 1);
-  const int row1 = std::clamp(static_cast<int>(std::ceil(y_max)) + margin + 1, row0 + 1, size.height);
+  const int row1 =
+      std::clamp(static_cast<int>(std::ceil(y_max)) + margin + 1, row0 + 1, size.height);
 
   cv::Mat map1x, map1y, map2x, map2y, ref_rect, other_rect;
   cv::initUndistortRectifyMap(k1, cv::noArray(), r1, p1, size, CV_32FC1, map1x, map1y);

@@ -4,10 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <opencv2/imgproc.hpp>
 #include <unordered_map>
 #include <vector>
-
-#include <opencv2/imgproc.hpp>
 
 #include "unseen/track/live_appearance.h"
 #include "unseen/util/error.h"
@@ -159,8 +158,7 @@ std::optional<Mesh> BuildSurfaceMesh(const DepthMap& depth_map, const cv::Mat& i
         v.in_cam = camera.Unproject(Eigen::Vector2d(v.x, v.y), z);
         since = 0;
         ++rep.candidate_vertices;
-        if (options.max_radius_m > 0.0 &&
-            (obj_from_cam * v.in_cam).norm() > options.max_radius_m) {
+        if (options.max_radius_m > 0.0 && (obj_from_cam * v.in_cam).norm() > options.max_radius_m) {
           ++rep.dropped_far;
           continue;
         }
@@ -169,12 +167,12 @@ std::optional<Mesh> BuildSurfaceMesh(const DepthMap& depth_map, const cv::Mat& i
     }
   }
   // One vertex per pixel (an outline vertex may fall on a box's).
-  std::sort(vertices.begin(), vertices.end(), [](const Vertex& a, const Vertex& b) {
-    return a.y != b.y ? a.y < b.y : a.x < b.x;
-  });
-  vertices.erase(std::unique(vertices.begin(), vertices.end(),
-                             [](const Vertex& a, const Vertex& b) { return a.x == b.x && a.y == b.y; }),
-                 vertices.end());
+  std::sort(vertices.begin(), vertices.end(),
+            [](const Vertex& a, const Vertex& b) { return a.y != b.y ? a.y < b.y : a.x < b.x; });
+  vertices.erase(
+      std::unique(vertices.begin(), vertices.end(),
+                  [](const Vertex& a, const Vertex& b) { return a.x == b.x && a.y == b.y; }),
+      vertices.end());
   if (vertices.size() < 3) {
     return fail(fmt::format("{} vertices with depth on the object (3 needed)", vertices.size()));
   }
@@ -183,7 +181,8 @@ std::optional<Mesh> BuildSurfaceMesh(const DepthMap& depth_map, const cv::Mat& i
   cv::Subdiv2D subdiv(cv::Rect(region.x - 1, region.y - 1, region.width + 2, region.height + 2));
   std::unordered_map<long, int> index_of;
   for (int i = 0; i < static_cast<int>(vertices.size()); ++i) {
-    subdiv.insert(cv::Point2f(static_cast<float>(vertices[i].x), static_cast<float>(vertices[i].y)));
+    subdiv.insert(
+        cv::Point2f(static_cast<float>(vertices[i].x), static_cast<float>(vertices[i].y)));
     index_of[long(vertices[i].y) * size.width + vertices[i].x] = i;
   }
   std::vector<cv::Vec6f> triangle_list;
@@ -218,10 +217,11 @@ std::optional<Mesh> BuildSurfaceMesh(const DepthMap& depth_map, const cv::Mat& i
     // midpoint is not that of the plane through its vertices there (inverse depth is linear
     // in the image, so the plane's depth at the mean of pixels is the harmonic mean).
     const double ia = 1.0 / a.in_cam.z(), ib = 1.0 / b.in_cam.z(), ic = 1.0 / c.in_cam.z();
-    const double step = std::max(options.min_depth_step_m, options.max_depth_step * 3.0 / (ia + ib + ic));
+    const double step =
+        std::max(options.min_depth_step_m, options.max_depth_step * 3.0 / (ia + ib + ic));
     auto off_plane = [&](double x, double y, double inverse_depth) {
-      const float measured = depth.at<float>(static_cast<int>(std::lround(y)),
-                                             static_cast<int>(std::lround(x)));
+      const float measured =
+          depth.at<float>(static_cast<int>(std::lround(y)), static_cast<int>(std::lround(x)));
       return measured > 0.0f && std::abs(measured - 1.0 / inverse_depth) > step;
     };
     if (off_plane(gx, gy, (ia + ib + ic) / 3.0) ||
@@ -261,8 +261,8 @@ std::optional<Mesh> BuildSurfaceMesh(const DepthMap& depth_map, const cv::Mat& i
   float radius = 0.0f;
   mesh.BoundingSphere(&centre, &radius);
   const PixelRect rect{grown.x, grown.y, grown.x + grown.width, grown.y + grown.height};
-  std::optional<Projector> projector = CaptureProjector(
-      mesh, camera, cam_from_obj, image, rect, std::max(0.003f, 0.05f * radius));
+  std::optional<Projector> projector =
+      CaptureProjector(mesh, camera, cam_from_obj, image, rect, std::max(0.003f, 0.05f * radius));
   if (!projector) return fail("the mesh covers none of the reference image");
   mesh.projectors.push_back(std::move(*projector));
   mesh.Check("on-line model");

@@ -17,10 +17,9 @@
 // mesh's depth seen from it.
 #pragma once
 
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
-
-#include <opencv2/core.hpp>
 
 #include "unseen/camera/camera.h"
 #include "unseen/geometry/rigid3.h"
@@ -30,32 +29,32 @@
 namespace unseen {
 
 struct SurfaceMeshOptions {
-  int median_px = 3;               // median filter of the depth map: 3 or 5 (1: none)
-  int cell_px = 12;                // side of a grid box, px (thesis: an m x n grid)
-  double min_texturedness = 0.002; // tau_T of (3.1) for a textured vertex
+  int median_px = 3;                // median filter of the depth map: 3 or 5 (1: none)
+  int cell_px = 12;                 // side of a grid box, px (thesis: an m x n grid)
+  double min_texturedness = 0.002;  // tau_T of (3.1) for a textured vertex
   double harris_k = 0.04;
-  double harris_quality = 0.01;    // a corner's response over the region's strongest
+  double harris_quality = 0.01;  // a corner's response over the region's strongest
   // Vertices where the depth map has depth but no texture (a depth sensor measures
   // textureless surfaces too); false for the image-based depth sources.
   bool untextured_vertices = false;
   // Beyond the thesis: vertices along the mask's outline too (where it has depth), so that
   // the mesh reaches the silhouette instead of stopping half a box inside it.
   bool contour_vertices = true;
-  double max_radius_m = 0.0;       // step 5; 0: no limit
+  double max_radius_m = 0.0;  // step 5; 0: no limit
   // A triangle spans a depth discontinuity where the depth measured at its centroid or an
   // edge's midpoint is off its plane by more than this share of its depth.
   double max_depth_step = 0.02;
-  double min_depth_step_m = 0.005; // ... and by at least this much
+  double min_depth_step_m = 0.005;  // ... and by at least this much
   void Check() const;
 };
 
 struct SurfaceMeshReport {
-  int candidate_vertices = 0;      // grid boxes with a vertex
-  int dropped_far = 0;             // beyond max_radius_m
+  int candidate_vertices = 0;  // grid boxes with a vertex
+  int dropped_far = 0;         // beyond max_radius_m
   int triangles_delaunay = 0;
-  int dropped_outside = 0;         // triangles outside the mask
-  int dropped_discontinuity = 0;   // triangles across a depth step
-  int vertices = 0, triangles = 0; // the mesh
+  int dropped_outside = 0;          // triangles outside the mask
+  int dropped_discontinuity = 0;    // triangles across a depth step
+  int vertices = 0, triangles = 0;  // the mesh
 };
 
 // The mesh of the surface `camera` sees of the object inside `mask` (CV_8UC1, non-zero =

@@ -1,10 +1,10 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/model/surface_mesh.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
-
-#include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
 #include "unseen/model/test_rig_scene.h"
@@ -87,8 +87,8 @@ TEST_F(SurfaceMesh, DropsTrianglesAcrossDepthStepsAndBeyondTheRadius) {
   }
   // With the object's extent, the wall is left out.
   options_.max_radius_m = 0.1;
-  const std::optional<Mesh> cube_only = BuildSurfaceMesh(
-      map_, scene_.frame.images[0], camera_, cam_from_obj_, grown, options_, &report);
+  const std::optional<Mesh> cube_only = BuildSurfaceMesh(map_, scene_.frame.images[0], camera_,
+                                                         cam_from_obj_, grown, options_, &report);
   ASSERT_TRUE(cube_only.has_value());
   EXPECT_GT(report.dropped_far, 0);
   for (const Eigen::Vector3f& v : cube_only->vertices) EXPECT_LT(OffCube(v), 0.004);
@@ -100,8 +100,8 @@ TEST_F(SurfaceMesh, ConcaveOutlinesAreNotFilled) {
   const cv::Rect box = cv::boundingRect(notched);
   const cv::Rect notch(box.x + box.width / 2 - 8, box.y, 16, box.height * 2 / 3);
   notched(notch).setTo(0);
-  const std::optional<Mesh> mesh = BuildSurfaceMesh(map_, scene_.frame.images[0], camera_,
-                                                    cam_from_obj_, notched, options_);
+  const std::optional<Mesh> mesh =
+      BuildSurfaceMesh(map_, scene_.frame.images[0], camera_, cam_from_obj_, notched, options_);
   ASSERT_TRUE(mesh.has_value());
   const RenderBuffers r = RenderAtTruth(*mesh);
   cv::Mat inner = cv::Mat::zeros(notched.size(), CV_8U);
@@ -135,9 +135,9 @@ TEST_F(SurfaceMesh, NothingToModelIsAStatusAndBadInputAnError) {
   EXPECT_NE(why.find("vertices"), std::string::npos) << why;
   cv::Mat small;
   cv::resize(scene_.object_masks[0], small, cv::Size(100, 80));
-  EXPECT_THROW(BuildSurfaceMesh(map_, scene_.frame.images[0], camera_, cam_from_obj_, small,
-                                options_),
-               Error);
+  EXPECT_THROW(
+      BuildSurfaceMesh(map_, scene_.frame.images[0], camera_, cam_from_obj_, small, options_),
+      Error);
   options_.cell_px = 1;
   EXPECT_THROW(options_.Check(), Error);
 }

@@ -5,10 +5,9 @@
 #pragma once
 
 #include <array>
-#include <vector>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "unseen/camera/camera.h"
 #include "unseen/io/sequence.h"
@@ -22,7 +21,7 @@ struct RigScene {
   Rig rig;
   Mesh object;
   Rigid3d world_from_obj;
-  Frame frame;                      // colour per camera, and exact depth per camera
+  Frame frame;                        // colour per camera, and exact depth per camera
   std::vector<cv::Mat> object_masks;  // per camera CV_8UC1, 255 where the object is seen
 };
 
@@ -49,8 +48,8 @@ inline RigScene MakeRigScene() {
     RenderBuffers wall_buffers, object_buffers;
     Render(wall, fine, c.cam_from_world() * world_from_wall, fine.ImageRect(), RenderOptions(),
            &wall_buffers);
-    Render(s.object, fine, c.cam_from_world() * s.world_from_obj, fine.ImageRect(),
-           RenderOptions(), &object_buffers);
+    Render(s.object, fine, c.cam_from_world() * s.world_from_obj, fine.ImageRect(), RenderOptions(),
+           &object_buffers);
     cv::Mat color = wall_buffers.color.clone();
     object_buffers.color.copyTo(color, object_buffers.mask);
     cv::Mat image;

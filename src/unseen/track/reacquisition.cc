@@ -467,8 +467,8 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
     for (Scored& c : scored) {
       TrackResult r = AlignCoarse(images, level, num_levels, c.pose);
       times += r.summary.times;
-      UNSEEN_LOG_DEBUG("candidate {} at level {}: conf {:.2f} at {}", c.order, level,
-                       r.confidence, r.world_from_obj.ToString());
+      UNSEEN_LOG_DEBUG("candidate {} at level {}: conf {:.2f} at {}", c.order, level, r.confidence,
+                       r.world_from_obj.ToString());
       if (!r.world_from_obj.IsValid()) continue;
       c.score = r.confidence;
       c.pose = r.world_from_obj;

@@ -428,8 +428,9 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
     }
     s.times.preprocess_ms += timer.ElapsedMilliseconds();
 
-    int max_iterations = level == 0 ? po.max_iterations_per_level
-                                    : std::min(po.max_iterations_per_level, po.coarse_max_iterations);
+    int max_iterations = level == 0
+                             ? po.max_iterations_per_level
+                             : std::min(po.max_iterations_per_level, po.coarse_max_iterations);
     if (span.max_iterations > 0) max_iterations = std::min(max_iterations, span.max_iterations);
     const double min_update_px = level == 0 ? po.min_update_px : po.coarse_min_update_px;
     for (int iteration = 0; iteration < max_iterations; ++iteration) {

@@ -50,9 +50,9 @@ struct StageTimes {
 
 // What the alignment of one frame did.
 struct SolveSummary {
-  int num_levels = 0;                    // pyramid depth: the coarsest level used + 1
-  std::vector<int> iterations_per_level; // solves; index = level (0 = full resolution;
-                                         // 0 solves below AlignLevels' finest level)
+  int num_levels = 0;                     // pyramid depth: the coarsest level used + 1
+  std::vector<int> iterations_per_level;  // solves; index = level (0 = full resolution;
+                                          // 0 solves below AlignLevels' finest level)
   int renders = 0;                       // render-solve rounds over all levels
   int resamples = 0;                     // solves that re-measured a round's rows instead
   double object_px = 0.0;  // the object's rendered area in the last level-0 round, all cameras

@@ -1,0 +1,75 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/model/model_updater.h"
+
+#include <chrono>
+#include <cmath>
+#include <utility>
+
+#include "unseen/util/error.h"
+#include "unseen/util/logging.h"
+
+namespace unseen {
+
+std::string ToString(ModelUpdateMode mode) {
+  return mode == ModelUpdateMode::kNone ? "none" : "periodic";
+}
+
+ModelUpdateMode ParseModelUpdateMode(const std::string& text) {
+  if (text == "none") return ModelUpdateMode::kNone;
+  if (text == "periodic") return ModelUpdateMode::kPeriodic;
+  ThrowError("model update '{}' is not one of none, periodic", text);
+}
+
+void ModelUpdateOptions::Check() const {
+  UNSEEN_CHECK(every_frames >= 1, "update.every_frames {} must be >= 1", every_frames);
+  UNSEEN_CHECK(min_confidence >= 0.0 && min_confidence <= 1.0,
+               "update.min_confidence {} must be in [0, 1]", min_confidence);
+}
+
+ModelUpdater::ModelUpdater(const Modeller* modeller, const ModelUpdateOptions& options)
+    : modeller_(*modeller), options_(options) {
+  options_.Check();
+}
+
+ModelUpdater::~ModelUpdater() {
+  if (pending_.valid()) pending_.wait();  // the build reads the modeller
+}
+
+std::optional<Mesh> ModelUpdater::Collect(ModelBuild build) {
+  stats_.build_ms += build.depth_ms + build.mesh_ms;
+  if (!build.ok()) {
+    ++stats_.failed;
+    stats_.last_failure = build.why;
+    UNSEEN_LOG_DEBUG("model update: cannot model the frame: {}", build.why);
+    return std::nullopt;
+  }
+  ++stats_.built;
+  ++stats_.swapped;
+  frames_since_model_ = 0;
+  UNSEEN_LOG_DEBUG("model update: new model, {} triangles, {:.1f} ms", build.mesh->num_triangles(),
+                   build.depth_ms + build.mesh_ms);
+  return std::move(build.mesh);
+}
+
+std::optional<Mesh> ModelUpdater::AfterFrame(const Frame& frame, const Rigid3d& world_from_obj,
+                                             double confidence) {
+  ++frames_since_model_;
+  std::optional<Mesh> ready;
+  if (pending_.valid() && pending_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+    ready = Collect(pending_.get());
+  }
+  if (options_.mode == ModelUpdateMode::kNone || pending_.valid() || ready) return ready;
+  if (frames_since_model_ < options_.every_frames || confidence < options_.min_confidence) {
+    return ready;
+  }
+  ++stats_.started;
+  frames_since_model_ = 0;  // the next attempt after every_frames more, built or not
+  if (!options_.asynchronous) return Collect(modeller_.Build(frame, world_from_obj, PixelRect()));
+  // The frame's images are shared, not copied: nothing writes to a frame once read.
+  pending_ = std::async(std::launch::async, [this, frame, world_from_obj] {
+    return modeller_.Build(frame, world_from_obj, PixelRect());
+  });
+  return ready;
+}
+
+}  // namespace unseen

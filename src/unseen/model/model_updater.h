@@ -1,0 +1,65 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// Keeping the on-line model current (SPEC 5.4, thesis 3.4): only the side the cameras see
+// can be modelled, so the model must follow the object as it turns. The thesis's periodic
+// replacement: every `every_frames` frames, a confidently tracked frame is modelled anew
+// at the tracked pose (the object frame carried over, so the pose stream continues), on a
+// thread of its own beside the tracking; the new model is handed over at the next frame
+// boundary once it is built.
+#pragma once
+
+#include <future>
+#include <optional>
+#include <string>
+
+#include "unseen/mesh/mesh.h"
+#include "unseen/model/modeller.h"
+
+namespace unseen {
+
+enum class ModelUpdateMode { kNone, kPeriodic };
+
+// "none", "periodic"; Parse throws unseen::Error naming the value.
+std::string ToString(ModelUpdateMode mode);
+ModelUpdateMode ParseModelUpdateMode(const std::string& text);
+
+struct ModelUpdateOptions {
+  ModelUpdateMode mode = ModelUpdateMode::kPeriodic;
+  int every_frames = 30;        // frames between model builds (thesis: n = 30)
+  double min_confidence = 0.8;  // a frame tracked at least this confidently is modelled
+  bool asynchronous = true;     // build beside the tracking (false: within the frame)
+  void Check() const;
+};
+
+struct ModelUpdateStats {
+  int started = 0, built = 0, failed = 0, swapped = 0;
+  double build_ms = 0.0;  // summed over finished builds
+  std::string last_failure;
+};
+
+class ModelUpdater {
+ public:
+  // `modeller` must outlive this.
+  ModelUpdater(const Modeller* modeller, const ModelUpdateOptions& options);
+  ~ModelUpdater();
+
+  // After each tracked frame, with the tracker's pose and confidence for it. Returns a
+  // new model to swap in now (Tracker::SetModel) when a build has finished; starts a build
+  // of this frame when one is due. A build that cannot model the frame is counted and
+  // dropped (the model in use stays).
+  std::optional<Mesh> AfterFrame(const Frame& frame, const Rigid3d& world_from_obj,
+                                 double confidence);
+
+  const ModelUpdateStats& stats() const { return stats_; }
+
+ private:
+  std::optional<Mesh> Collect(ModelBuild build);
+
+  const Modeller& modeller_;
+  ModelUpdateOptions options_;
+  int frames_since_model_ = 0;
+  std::future<ModelBuild> pending_;
+  ModelUpdateStats stats_;
+};
+
+}  // namespace unseen

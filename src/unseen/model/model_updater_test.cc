@@ -1,0 +1,83 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/model/model_updater.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+#include "unseen/model/test_rig_scene.h"
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+using testing::MakeRigScene;
+using testing::RigScene;
+
+class ModelUpdates : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    scene_ = MakeRigScene();
+    options_.depth.source = DepthSourceKind::kSensor;
+    modeller_ = std::make_unique<Modeller>(scene_.rig, 0, options_);
+    update_.every_frames = 3;
+    update_.asynchronous = false;
+  }
+  RigScene scene_;
+  ModellerOptions options_;
+  std::unique_ptr<Modeller> modeller_;
+  ModelUpdateOptions update_;
+};
+
+TEST_F(ModelUpdates, EveryNthConfidentFrameGivesANewModel) {
+  ModelUpdater updater(modeller_.get(), update_);
+  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0));
+  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0));
+  // Due, but doubtful: waits for a confident frame.
+  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 0.3));
+  const std::optional<Mesh> model = updater.AfterFrame(scene_.frame, scene_.world_from_obj, 0.9);
+  ASSERT_TRUE(model.has_value());
+  EXPECT_GT(model->num_triangles(), 30);
+  EXPECT_EQ(updater.stats().built, 1);
+  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0));
+}
+
+TEST_F(ModelUpdates, AFrameThatCannotBeModelledKeepsTheModelInUse) {
+  ModelUpdater updater(modeller_.get(), update_);
+  Frame no_depth = scene_.frame;
+  no_depth.depths[0] = cv::Mat(scene_.frame.depths[0].size(), CV_32FC1, cv::Scalar(0));
+  for (int i = 0; i < 3; ++i)
+    EXPECT_FALSE(updater.AfterFrame(no_depth, scene_.world_from_obj, 1.0));
+  EXPECT_EQ(updater.stats().started, 1);
+  EXPECT_EQ(updater.stats().failed, 1);
+  EXPECT_FALSE(updater.stats().last_failure.empty());
+}
+
+TEST_F(ModelUpdates, BuildsBesideTheTrackingAndHandsOverLater) {
+  update_.asynchronous = true;
+  update_.every_frames = 1;
+  ModelUpdater updater(modeller_.get(), update_);
+  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0));  // started
+  std::optional<Mesh> model;
+  for (int i = 0; i < 200 && !model; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    model = updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0);
+  }
+  ASSERT_TRUE(model.has_value());
+  EXPECT_EQ(updater.stats().started, 1);
+}
+
+TEST_F(ModelUpdates, NoneNeverRebuildsAndBadOptionsAreErrors) {
+  update_.mode = ModelUpdateMode::kNone;
+  ModelUpdater updater(modeller_.get(), update_);
+  for (int i = 0; i < 10; ++i)
+    EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0));
+  EXPECT_EQ(updater.stats().started, 0);
+  EXPECT_THROW(ParseModelUpdateMode("incrementally"), Error);
+  update_.every_frames = 0;
+  EXPECT_THROW(update_.Check(), Error);
+}
+
+}  // namespace
+}  // namespace unseen
