@@ -3,6 +3,8 @@
 // `unseen track SEQ --init gt|POSE`: tracks the sequence's object (or --model) through every
 // frame with the 6-DoF tracker, writes the pose stream, a statistics JSON and optionally an
 // overlay video, and prints a summary (fps, lost frames, error against ground truth).
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -10,19 +12,19 @@
 #include <fstream>
 #include <future>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
-#include <nlohmann/json.hpp>
-
 #include "tools/unseen/commands.h"
+#include "tools/unseen/unknown_object.h"
 #include "unseen/eval/overlay.h"
 #include "unseen/io/pose_stream.h"
 #include "unseen/io/sequence.h"
 #include "unseen/mesh/mesh_io.h"
+#include "unseen/model/model_updater.h"
+#include "unseen/model/modeller.h"
 #include "unseen/track/tracker.h"
 #include "unseen/util/error.h"
 #include "unseen/util/files.h"
@@ -47,6 +49,13 @@ struct TrackArgs {
   int first_frame = 0;
   int max_frames = 0;
   int threads = -1;  // -1: as the options say
+  // --unknown: no model file; the modeller builds one from the first frame and keeps it
+  // current (SPEC 5).
+  bool unknown = false;
+  UnknownObjectArgs object;  // --roi, --mask, --depth, --model-config (init: --init)
+  std::string update = "periodic";
+  int update_frames = 30;
+  std::string save_model;
 };
 
 std::vector<std::string> SplitComma(const std::string& text) {
@@ -100,7 +109,47 @@ void RunTrack(const TrackArgs& args) {
   }
 
   Mesh model;
-  if (args.model.empty()) {
+  std::unique_ptr<Modeller> modeller;
+  std::unique_ptr<ModelUpdater> updater;
+  UNSEEN_CHECK(args.first_frame >= 0 && args.first_frame < sequence.num_frames(),
+               "track: --first-frame {} is outside [0, {})", args.first_frame,
+               sequence.num_frames());
+  std::optional<Rigid3d> unknown_start;
+  if (args.unknown) {
+    UNSEEN_CHECK(args.model.empty(), "track: --unknown and --model exclude each other");
+    UnknownObjectArgs object = args.object;
+    object.init = args.init;
+    const ModellerOptions model_options = ModellerOptionsFor(object, sequence, "track");
+    int reference = sequence.rig().Find(reference_name);
+    UNSEEN_CHECK(reference >= 0,
+                 "track: --cameras leaves out the reference camera '{}' the "
+                 "model is built from",
+                 reference_name);
+    modeller = std::make_unique<Modeller>(sequence.rig(), reference, model_options);
+    const Frame first = sequence.ReadFrame(args.first_frame);
+    const ObjectStart start =
+        LocateUnknownObject(object, sequence, args.first_frame, first, *modeller, "track");
+    const ModelBuild build = modeller->Build(first, start.world_from_obj, start.region, start.mask);
+    UNSEEN_CHECK(build.ok(), "track: cannot model the object in the first frame: {}", build.why);
+    UNSEEN_LOG_INFO("track: on-line model from frame {}: {} triangles ({}, {:.1f} ms)",
+                    first.frame_id, build.mesh->num_triangles(),
+                    ToString(model_options.depth.source), build.depth_ms + build.mesh_ms);
+    model = *build.mesh;
+    unknown_start = start.world_from_obj;
+    ModelUpdateOptions update;
+    try {
+      update.mode = ParseModelUpdateMode(args.update);
+    } catch (const Error& e) {
+      ThrowError("track: --update: {}", e.what());
+    }
+    update.every_frames = args.update_frames;
+    try {
+      update.Check();
+    } catch (const Error& e) {
+      ThrowError("track: --update-frames: {}", e.what());
+    }
+    updater = std::make_unique<ModelUpdater>(modeller.get(), update);
+  } else if (args.model.empty()) {
     UNSEEN_CHECK(!sequence.model_path().empty(),
                  "track: sequence '{}' has no model; give one with --model", args.sequence);
     model = sequence.LoadModel();
@@ -110,10 +159,11 @@ void RunTrack(const TrackArgs& args) {
   if (args.model_scale != 1.0) model.Scale(static_cast<float>(args.model_scale));
 
   Rigid3d initial;
-  UNSEEN_CHECK(args.first_frame >= 0 && args.first_frame < sequence.num_frames(),
-               "track: --first-frame {} is outside [0, {})", args.first_frame,
-               sequence.num_frames());
-  if (args.init == "gt") {
+  UNSEEN_CHECK(unknown_start || !args.init.empty(),
+               "track: --init is required (gt, or tx,ty,tz,qx,qy,qz,qw)");
+  if (unknown_start) {
+    initial = *unknown_start;
+  } else if (args.init == "gt") {
     const std::optional<Rigid3d> gt = sequence.GroundTruth(args.first_frame);
     UNSEEN_CHECK(gt.has_value(), "track: --init gt but sequence '{}' has no ground truth for "
                  "its first frame", args.sequence);
@@ -168,6 +218,12 @@ void RunTrack(const TrackArgs& args) {
     if (image_missing) ++unreadable;
     Timer timer;
     const TrackResult r = tracker.Track(frame);
+    if (updater && r.status == TrackStatus::kTracking) {
+      // A model built beside the tracking takes over at this frame boundary.
+      if (std::optional<Mesh> next = updater->AfterFrame(frame, r.world_from_obj, r.confidence)) {
+        tracker.SetModel(std::move(*next));
+      }
+    }
     const double ms = timer.ElapsedMilliseconds();
     sum_process_ms += ms;
     sum_times += r.summary.times;
@@ -200,6 +256,18 @@ void RunTrack(const TrackArgs& args) {
   std::printf("  mean ms: predict %.3f render %.3f preprocess %.3f select %.3f solve %.3f\n",
               sum_times.predict_ms / n, sum_times.render_ms / n, sum_times.preprocess_ms / n,
               sum_times.select_ms / n, sum_times.solve_ms / n);
+  if (updater) {
+    const ModelUpdateStats& u = updater->stats();
+    std::printf(
+        "  on-line model: %d builds started, %d swapped in, %d could not model (%.1f ms "
+        "per build)\n",
+        u.started, u.swapped, u.failed,
+        u.built + u.failed > 0 ? u.build_ms / (u.built + u.failed) : 0.0);
+  }
+  if (!args.save_model.empty()) {
+    SaveMesh(tracker.model(), args.save_model, 1000.0);
+    std::printf("  model in use saved to %s (mm)\n", args.save_model.c_str());
+  }
   if (unreadable > 0) {
     std::printf("  %d frame(s) with an unreadable image (see the warnings)\n", unreadable);
   }
@@ -243,10 +311,25 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_option("--model", args->model, "Model file (default: the sequence's model)");
   cmd->add_option("--model-units", args->model_units, "Units of --model: mm (BOP) or m");
   cmd->add_option("--model-scale", args->model_scale, "Scale the model by this factor");
+  cmd->add_flag("--unknown", args->unknown,
+                "No model file: build the model on-line from the frames (--init gt, --roi or "
+                "--mask says where the object is)");
+  cmd->add_option("--roi", args->object.roi, "--unknown: object region x,y,w,h (reference image)");
+  cmd->add_option("--mask", args->object.mask, "--unknown: object mask image (non-zero = object)");
+  cmd->add_option("--depth", args->object.depth,
+                  "--unknown: depth source planesweep, stereo or sensor (default: sensor with "
+                  "depth images, else planesweep)");
+  cmd->add_option("--model-config", args->object.model_config,
+                  "--unknown: modeller options (YAML)");
+  cmd->add_option("--update", args->update,
+                  "--unknown: model update, periodic (rebuild every --update-frames) or none");
+  cmd->add_option("--update-frames", args->update_frames,
+                  "--unknown: frames between model rebuilds");
+  cmd->add_option("--save-model", args->save_model,
+                  "Write the model in use at the end (.ply/.obj, millimetres)");
   cmd->add_option("--init", args->init,
                   "Initial pose: 'gt' (first frame's ground truth) or tx,ty,tz,qx,qy,qz,qw "
-                  "(metres, world frame)")
-      ->required();
+                  "(metres, world frame); required but with --unknown --roi/--mask");
   cmd->add_option("--config", args->config, "Tracker options (YAML)");
   cmd->add_option("--cameras", args->cameras, "Comma-separated cameras to use (default: all)");
   cmd->add_option("--out", args->out, "Pose stream to write (.csv or .jsonl)");

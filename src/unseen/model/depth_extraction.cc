@@ -41,6 +41,8 @@ void PlaneSweepOptions::Check() const {
                max_cost);
   UNSEEN_CHECK(uniqueness >= 0.0 && uniqueness < 1.0, "plane_sweep.uniqueness {} must be in [0, 1)",
                uniqueness);
+  UNSEEN_CHECK(min_support >= 0 && min_support <= 24,
+               "plane_sweep.min_support {} must be in [0, 24]", min_support);
   UNSEEN_CHECK(refine_iterations >= 0 && refine_iterations <= 10,
                "plane_sweep.refine_iterations {} must be in [0, 10]", refine_iterations);
   UNSEEN_CHECK(smoothness >= 0.0 && std::isfinite(smoothness),
@@ -130,6 +132,7 @@ class SensorDepth : public DepthSource {
     DepthMap out;
     out.texturedness = Texturedness(frame.images[reference_]);
     out.depth = cv::Mat::zeros(d.size(), CV_32FC1);
+    out.dense = true;
     const PixelRect r =
         (roi.empty() ? cam.intrinsics.ImageRect() : roi).Intersect(cam.intrinsics.ImageRect());
     for (int y = r.y0; y < r.y1; ++y) {

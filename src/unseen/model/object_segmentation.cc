@@ -19,6 +19,8 @@ void SegmentationOptions::Check() const {
                "segmentation.max_radius_m {} must be > 0", max_radius_m);
   UNSEEN_CHECK(plane_tolerance_m > 0.0 && std::isfinite(plane_tolerance_m),
                "segmentation.plane_tolerance_m {} must be > 0", plane_tolerance_m);
+  UNSEEN_CHECK(plane_normal_deg > 0.0 && plane_normal_deg <= 90.0,
+               "segmentation.plane_normal_deg {} must be in (0, 90]", plane_normal_deg);
   UNSEEN_CHECK(plane_iterations >= 1 && plane_iterations <= 100000,
                "segmentation.plane_iterations {} must be in [1, 100000]", plane_iterations);
   UNSEEN_CHECK(min_plane_share > 0.0 && min_plane_share <= 1.0,
@@ -31,46 +33,92 @@ void SegmentationOptions::Check() const {
 
 namespace {
 
+// A measured point with the surface normal the depth map shows there (zero if unknown).
+struct Surfel {
+  Eigen::Vector3d p;
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+};
+
 struct Plane {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
   double offset = 0.0;  // normal . p + offset = 0
-  double Distance(const Eigen::Vector3d& p) const { return std::abs(normal.dot(p) + offset); }
+  // On the plane: near it and facing its way (a surface that only crosses the plane, as
+  // the table beside a box's face crosses the face's plane, is not on it).
+  bool Holds(const Surfel& s, const SegmentationOptions& o) const {
+    return std::abs(normal.dot(s.p) + offset) < o.plane_tolerance_m &&
+           std::abs(normal.dot(s.n)) >= std::cos(o.plane_normal_deg * M_PI / 180.0);
+  }
 };
 
-// The plane through the most of `points` (RANSAC, seeded), if it holds min_share of them
-// and reaches farther than `rim` from `origin` (a support, not a face of the object).
-std::optional<Plane> SupportPlane(const std::vector<Eigen::Vector3d>& points,
-                                  const Eigen::Vector3d& origin, double rim,
-                                  const SegmentationOptions& o) {
-  if (points.size() < 3) return std::nullopt;
-  std::mt19937 rng(12345);
-  std::uniform_int_distribution<size_t> pick(0, points.size() - 1);
+// The plane through the most of `points` (RANSAC, seeded) whose inliers hold min_share of
+// them, or std::nullopt.
+std::optional<Plane> DominantPlane(const std::vector<Surfel>& points,
+                                   const std::vector<bool>& excluded, const SegmentationOptions& o,
+                                   std::mt19937* rng) {
+  std::vector<int> candidates;
+  for (int i = 0; i < static_cast<int>(points.size()); ++i) {
+    if (!excluded[i]) candidates.push_back(i);
+  }
+  if (candidates.size() < 3) return std::nullopt;
+  std::uniform_int_distribution<size_t> pick(0, candidates.size() - 1);
   // Scored on an even subsample of at most 2 000 points.
-  const size_t stride = std::max<size_t>(1, points.size() / 2000);
+  const size_t stride = std::max<size_t>(1, candidates.size() / 2000);
   Plane best;
   int best_inliers = 0;
   for (int it = 0; it < o.plane_iterations; ++it) {
-    const Eigen::Vector3d& a = points[pick(rng)];
-    const Eigen::Vector3d& b = points[pick(rng)];
-    const Eigen::Vector3d& c = points[pick(rng)];
-    Eigen::Vector3d n = (b - a).cross(c - a);
+    const Eigen::Vector3d& a = points[candidates[pick(*rng)]].p;
+    const Eigen::Vector3d& b = points[candidates[pick(*rng)]].p;
+    const Eigen::Vector3d& c = points[candidates[pick(*rng)]].p;
+    const Eigen::Vector3d n = (b - a).cross(c - a);
     if (n.norm() < 1e-9) continue;
     Plane p;
     p.normal = n.normalized();
     p.offset = -p.normal.dot(a);
     int inliers = 0;
-    for (size_t i = 0; i < points.size(); i += stride) {
-      inliers += p.Distance(points[i]) < o.plane_tolerance_m ? 1 : 0;
+    for (size_t i = 0; i < candidates.size(); i += stride) {
+      inliers += p.Holds(points[candidates[i]], o) ? 1 : 0;
     }
     if (inliers > best_inliers) {
       best_inliers = inliers;
       best = p;
     }
   }
-  const size_t scored = (points.size() + stride - 1) / stride;
+  const size_t scored = (candidates.size() + stride - 1) / stride;
   if (best_inliers < o.min_plane_share * scored) return std::nullopt;
-  for (const Eigen::Vector3d& p : points) {
-    if (best.Distance(p) < o.plane_tolerance_m && (p - origin).norm() > rim) return best;
+  return best;
+}
+
+// The support the object stands on: of the dominant planes among `points` (pixels
+// `pixels` of an image of `size`), the first with inliers farther than `rim` from `origin`
+// in a connected stretch of the image — a table runs on beyond the object, a face of an
+// object smaller than `rim` does not (its plane meets far surfaces in scattered lines at
+// most). Up to four planes are tried (a box shows three faces), each one's inliers set
+// aside.
+std::optional<Plane> SupportPlane(const std::vector<Surfel>& points,
+                                  const std::vector<cv::Point>& pixels, cv::Size size,
+                                  const Eigen::Vector3d& origin, double rim,
+                                  const SegmentationOptions& o) {
+  std::mt19937 rng(12345);
+  std::vector<bool> excluded(points.size(), false);
+  for (int attempt = 0; attempt < 4; ++attempt) {
+    const std::optional<Plane> plane = DominantPlane(points, excluded, o, &rng);
+    if (!plane) return std::nullopt;
+    cv::Mat inliers = cv::Mat::zeros(size, CV_8UC1);
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (!excluded[i] && plane->Holds(points[i], o)) {
+        inliers.at<uint8_t>(pixels[i]) = 255;
+      }
+    }
+    cv::Mat labels;
+    cv::connectedComponents(inliers, labels, 8, CV_32S);
+    // A stretch that reaches beyond the rim.
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (excluded[i] || labels.at<int>(pixels[i]) <= 0) continue;
+      if ((points[i].p - origin).norm() > rim) return plane;
+    }
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (plane->Holds(points[i], o)) excluded[i] = true;
+    }
   }
   return std::nullopt;
 }
@@ -114,14 +162,40 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
     }
   }
   rep.with_depth = static_cast<int>(points.size());
-  rep.dense = rep.region_pixels > 0 && rep.with_depth >= options.dense_share * rep.region_pixels;
+  // Normals from the depth map: the cross product of the horizontal and vertical chords
+  // through the pixel (3 px each way).
+  std::vector<Surfel> surfels(points.size());
+  constexpr int kChord = 3;
+  auto point_at = [&](int x, int y, Eigen::Vector3d* p) {
+    if (x < 0 || y < 0 || x >= size.width || y >= size.height) return false;
+    const float z = depth_map.depth.at<float>(y, x);
+    if (!(z > 0.0f)) return false;
+    *p = camera.Unproject(Eigen::Vector2d(x, y), z);
+    return true;
+  };
+  for (size_t i = 0; i < points.size(); ++i) {
+    surfels[i].p = points[i];
+    Eigen::Vector3d l, r, u, d;
+    const cv::Point& px = pixels[i];
+    if (point_at(px.x - kChord, px.y, &l) && point_at(px.x + kChord, px.y, &r) &&
+        point_at(px.x, px.y - kChord, &u) && point_at(px.x, px.y + kChord, &d)) {
+      const Eigen::Vector3d n = (r - l).cross(d - u);
+      if (n.norm() > 1e-12) surfels[i].n = n.normalized();
+    }
+  }
+  rep.dense = depth_map.dense ||
+              (rep.region_pixels > 0 && rep.with_depth >= options.dense_share * rep.region_pixels);
   std::optional<Plane> support;
   if (options.remove_support_plane) {
-    std::vector<Eigen::Vector3d> near;
-    for (const Eigen::Vector3d& p : points) {
-      if ((p - origin_in_cam).norm() <= options.max_radius_m) near.push_back(p);
+    std::vector<Surfel> near;
+    std::vector<cv::Point> near_pixels;
+    for (size_t i = 0; i < points.size(); ++i) {
+      if ((points[i] - origin_in_cam).norm() > options.max_radius_m) continue;
+      near.push_back(surfels[i]);
+      near_pixels.push_back(pixels[i]);
     }
-    support = SupportPlane(near, origin_in_cam, 0.7 * options.max_radius_m, options);
+    support =
+        SupportPlane(near, near_pixels, size, origin_in_cam, 0.7 * options.max_radius_m, options);
     rep.plane_found = support.has_value();
   }
   // Where the depth is dense, the pixels without depth are not the object's either.
@@ -133,7 +207,7 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
     if ((points[i] - origin_in_cam).norm() > options.max_radius_m) {
       ++rep.beyond_radius;
       out.at<uint8_t>(px) = 0;
-    } else if (support && support->Distance(points[i]) < options.plane_tolerance_m) {
+    } else if (support && support->Holds(surfels[i], options)) {
       ++rep.on_plane;
       out.at<uint8_t>(px) = 0;
     }

@@ -21,12 +21,13 @@ namespace unseen {
 struct SegmentationOptions {
   double max_radius_m = 0.15;  // the object's extent around its origin
   bool remove_support_plane = true;
-  double plane_tolerance_m = 0.006;  // a pixel this close to the support plane is on it
+  double plane_tolerance_m = 0.006;  // a pixel this close to the support plane is on it ...
+  double plane_normal_deg = 25.0;    // ... if its surface normal is this close to the plane's
   int plane_iterations = 200;        // RANSAC hypotheses
   double min_plane_share = 0.15;     // the plane holds at least this share of the pixels
   // Neighbouring pixels are connected when their depths differ by less than this share
-  // of the depth; the connectivity applies where at least dense_share of the region's
-  // pixels have depth.
+  // of the depth; the connectivity applies to dense depth maps (DepthMap::dense) and where
+  // at least dense_share of the region's pixels have depth.
   double max_depth_step = 0.03;
   double dense_share = 0.5;
   void Check() const;

@@ -193,6 +193,28 @@ DepthMap PlaneSweepDepth::Extract(const Frame& frame, const PixelRect& roi, doub
         curvature > 1e-6f ? std::clamp(0.5f * (cm - cp) / curvature, -0.5f, 0.5f) : 0.0f;
     *depth = static_cast<float>(1.0 / (inv_far + (k + offset) * inv_step));
   });
+  // Isolated depths out.
+  if (o.min_support > 0) {
+    const cv::Mat measured = out.depth.clone();
+    for (int y = r.y0; y < r.y1; ++y) {
+      for (int x = r.x0; x < r.x1; ++x) {
+        const float z = measured.at<float>(y, x);
+        if (!(z > 0.0f)) continue;
+        int support = 0;
+        for (int dy = -2; dy <= 2; ++dy) {
+          for (int dx = -2; dx <= 2; ++dx) {
+            const int xx = x + dx, yy = y + dy;
+            if ((dx == 0 && dy == 0) || xx < 0 || yy < 0 || xx >= measured.cols ||
+                yy >= measured.rows) {
+              continue;
+            }
+            support += std::abs(measured.at<float>(yy, xx) - z) < 0.02f * z ? 1 : 0;
+          }
+        }
+        if (support < o.min_support) out.depth.at<float>(y, x) = 0.0f;
+      }
+    }
+  }
   return out;
 }
 

@@ -264,6 +264,10 @@ std::optional<Mesh> BuildSurfaceMesh(const DepthMap& depth_map, const cv::Mat& i
   std::optional<Projector> projector =
       CaptureProjector(mesh, camera, cam_from_obj, image, rect, std::max(0.003f, 0.05f * radius));
   if (!projector) return fail("the mesh covers none of the reference image");
+  // The mesh is the surface the projector saw, all of it in its view: no self-occlusion to
+  // test (the depth test would only drop colours at its rims, where rendered and seen depth
+  // part by a pixel).
+  projector->depth.release();
   mesh.projectors.push_back(std::move(*projector));
   mesh.Check("on-line model");
   return mesh;

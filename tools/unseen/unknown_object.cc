@@ -1,0 +1,105 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "tools/unseen/unknown_object.h"
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <vector>
+
+#include "unseen/util/error.h"
+#include "unseen/util/files.h"
+
+namespace unseen::cli {
+
+PixelRect ParseRoi(const std::string& text, const std::string& command) {
+  std::vector<int> v;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      size_t used = 0;
+      v.push_back(std::stoi(item, &used));
+      UNSEEN_CHECK(used == item.size(), "trailing characters");
+    } catch (const std::exception&) {
+      ThrowError("{}: --roi '{}': '{}' is not a whole number of pixels", command, text, item);
+    }
+  }
+  UNSEEN_CHECK(v.size() == 4, "{}: --roi '{}' must be four numbers x,y,w,h", command, text);
+  UNSEEN_CHECK(v[2] > 0 && v[3] > 0, "{}: --roi '{}' has no area (w {} h {})", command, text, v[2],
+               v[3]);
+  return PixelRect{v[0], v[1], v[0] + v[2], v[1] + v[3]};
+}
+
+ModellerOptions ModellerOptionsFor(const UnknownObjectArgs& args, const Sequence& sequence,
+                                   const std::string& command) {
+  ModellerOptions options;
+  if (!args.model_config.empty()) options = LoadModellerOptions(args.model_config);
+  if (!args.depth.empty()) {
+    try {
+      options.depth.source = ParseDepthSourceKind(args.depth);
+    } catch (const Error& e) {
+      ThrowError("{}: --depth: {}", command, e.what());
+    }
+  } else if (args.model_config.empty()) {
+    options.depth.source = sequence.has_depth()         ? DepthSourceKind::kSensor
+                           : sequence.rig().size() >= 2 ? DepthSourceKind::kPlaneSweep
+                                                        : DepthSourceKind::kSensor;
+  }
+  UNSEEN_CHECK(options.depth.source != DepthSourceKind::kSensor || sequence.has_depth(),
+               "{}: --depth sensor but sequence '{}' has no depth images (use planesweep or "
+               "stereo with two cameras or more)",
+               command, sequence.path());
+  return options;
+}
+
+ObjectStart LocateUnknownObject(const UnknownObjectArgs& args, const Sequence& sequence, int index,
+                                const Frame& frame, const Modeller& modeller,
+                                const std::string& command) {
+  UNSEEN_CHECK(args.init == "gt" || !args.roi.empty() || !args.mask.empty(),
+               "{}: say where the object is: --init gt, --roi x,y,w,h or --mask FILE", command);
+  UNSEEN_CHECK(args.init.empty() || args.init == "gt",
+               "{}: --init '{}' for an unknown object must be 'gt' (or use --roi/--mask)", command,
+               args.init);
+  const PinholeCamera& camera = sequence.rig().cameras[modeller.reference()].intrinsics;
+  ObjectStart out;
+  if (!args.roi.empty()) out.region = ParseRoi(args.roi, command);
+  if (!args.mask.empty()) {
+    UNSEEN_CHECK(Exists(args.mask), "{}: --mask '{}' does not exist", command, args.mask);
+    out.mask = cv::imread(args.mask, cv::IMREAD_GRAYSCALE);
+    UNSEEN_CHECK(!out.mask.empty(), "{}: --mask '{}' is not a readable image", command, args.mask);
+    UNSEEN_CHECK(out.mask.cols == camera.width && out.mask.rows == camera.height,
+                 "{}: --mask '{}' is {}x{}; the reference camera is {}x{}", command, args.mask,
+                 out.mask.cols, out.mask.rows, camera.width, camera.height);
+    const cv::Rect box = cv::boundingRect(out.mask);
+    UNSEEN_CHECK(box.area() > 0, "{}: --mask '{}' marks no pixel", command, args.mask);
+    const PixelRect mask_rect{box.x, box.y, box.x + box.width, box.y + box.height};
+    out.region = out.region.empty() ? mask_rect : out.region.Intersect(mask_rect);
+  }
+  if (!out.region.empty()) {
+    const PixelRect inside = out.region.Intersect(camera.ImageRect());
+    UNSEEN_CHECK(inside.width() >= 8 && inside.height() >= 8,
+                 "{}: the object's region x {} y {} w {} h {} has less than 8x8 pixels inside "
+                 "the {}x{} image",
+                 command, out.region.x0, out.region.y0, out.region.width(), out.region.height(),
+                 camera.width, camera.height);
+    out.region = inside;
+  }
+  if (args.init == "gt") {
+    const std::optional<Rigid3d> gt = sequence.GroundTruth(index);
+    UNSEEN_CHECK(gt.has_value(),
+                 "{}: --init gt but sequence '{}' has no ground truth for frame "
+                 "index {}",
+                 command, sequence.path(), index);
+    out.world_from_obj = *gt;
+    return out;
+  }
+  const std::optional<Rigid3d> start = modeller.InitialPose(frame, out.region, out.mask);
+  UNSEEN_CHECK(start.has_value(),
+               "{}: no depth measured in the object's region (source {}): cannot place the "
+               "object",
+               command, ToString(modeller.options().depth.source));
+  out.world_from_obj = *start;
+  return out;
+}
+
+}  // namespace unseen::cli
