@@ -55,6 +55,7 @@ struct TrackArgs {
   UnknownObjectArgs object;  // --roi, --mask, --depth, --model-config (init: --init)
   std::string update = "periodic";
   int update_frames = 30;
+  bool update_in_frame = false;
   std::string save_model;
 };
 
@@ -143,6 +144,7 @@ void RunTrack(const TrackArgs& args) {
       ThrowError("track: --update: {}", e.what());
     }
     update.every_frames = args.update_frames;
+    update.asynchronous = !args.update_in_frame;
     try {
       update.Check();
     } catch (const Error& e) {
@@ -325,6 +327,9 @@ void AddTrackCommand(CLI::App& app) {
                   "--unknown: model update, periodic (rebuild every --update-frames) or none");
   cmd->add_option("--update-frames", args->update_frames,
                   "--unknown: frames between model rebuilds");
+  cmd->add_flag("--update-in-frame", args->update_in_frame,
+                "--unknown: build each new model within its frame instead of beside the "
+                "tracking (reproducible runs; the frame's time includes the build)");
   cmd->add_option("--save-model", args->save_model,
                   "Write the model in use at the end (.ply/.obj, millimetres)");
   cmd->add_option("--init", args->init,

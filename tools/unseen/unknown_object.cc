@@ -55,11 +55,11 @@ ModellerOptions ModellerOptionsFor(const UnknownObjectArgs& args, const Sequence
 ObjectStart LocateUnknownObject(const UnknownObjectArgs& args, const Sequence& sequence, int index,
                                 const Frame& frame, const Modeller& modeller,
                                 const std::string& command) {
-  UNSEEN_CHECK(args.init == "gt" || !args.roi.empty() || !args.mask.empty(),
-               "{}: say where the object is: --init gt, --roi x,y,w,h or --mask FILE", command);
   UNSEEN_CHECK(args.init.empty() || args.init == "gt",
                "{}: --init '{}' for an unknown object must be 'gt' (or use --roi/--mask)", command,
                args.init);
+  UNSEEN_CHECK(args.init == "gt" || !args.roi.empty() || !args.mask.empty(),
+               "{}: say where the object is: --init gt, --roi x,y,w,h or --mask FILE", command);
   const PinholeCamera& camera = sequence.rig().cameras[modeller.reference()].intrinsics;
   ObjectStart out;
   if (!args.roi.empty()) out.region = ParseRoi(args.roi, command);
