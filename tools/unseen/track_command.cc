@@ -222,7 +222,8 @@ void RunTrack(const TrackArgs& args) {
     const TrackResult r = tracker.Track(frame);
     if (updater && r.status == TrackStatus::kTracking) {
       // A model built beside the tracking takes over at this frame boundary.
-      if (std::optional<Mesh> next = updater->AfterFrame(frame, r.world_from_obj, r.confidence)) {
+      if (std::optional<Mesh> next =
+              updater->AfterFrame(frame, r.world_from_obj, r.confidence, tracker.model())) {
         tracker.SetModel(std::move(*next));
       }
     }
@@ -261,9 +262,9 @@ void RunTrack(const TrackArgs& args) {
   if (updater) {
     const ModelUpdateStats& u = updater->stats();
     std::printf(
-        "  on-line model: %d builds started, %d swapped in, %d could not model (%.1f ms "
-        "per build)\n",
-        u.started, u.swapped, u.failed,
+        "  on-line model: %d builds started, %d swapped in (%d aligned to the model in "
+        "use, mean correction %.1f mm), %d could not model (%.1f ms per build)\n",
+        u.started, u.swapped, u.aligned, u.aligned ? u.correction_mm / u.aligned : 0.0, u.failed,
         u.built + u.failed > 0 ? u.build_ms / (u.built + u.failed) : 0.0);
   }
   if (!args.save_model.empty()) {

@@ -32,18 +32,19 @@ PixelRect ParseRoi(const std::string& text, const std::string& command) {
 
 ModellerOptions ModellerOptionsFor(const UnknownObjectArgs& args, const Sequence& sequence,
                                    const std::string& command) {
+  // The sequence's natural source (its depth images, else the plane sweep over its
+  // cameras), under what the file and --depth say.
   ModellerOptions options;
-  if (!args.model_config.empty()) options = LoadModellerOptions(args.model_config);
+  options.depth.source = sequence.has_depth()         ? DepthSourceKind::kSensor
+                         : sequence.rig().size() >= 2 ? DepthSourceKind::kPlaneSweep
+                                                      : DepthSourceKind::kSensor;
+  if (!args.model_config.empty()) options = LoadModellerOptions(args.model_config, options);
   if (!args.depth.empty()) {
     try {
       options.depth.source = ParseDepthSourceKind(args.depth);
     } catch (const Error& e) {
       ThrowError("{}: --depth: {}", command, e.what());
     }
-  } else if (args.model_config.empty()) {
-    options.depth.source = sequence.has_depth()         ? DepthSourceKind::kSensor
-                           : sequence.rig().size() >= 2 ? DepthSourceKind::kPlaneSweep
-                                                        : DepthSourceKind::kSensor;
   }
   UNSEEN_CHECK(options.depth.source != DepthSourceKind::kSensor || sequence.has_depth(),
                "{}: --depth sensor but sequence '{}' has no depth images (use planesweep or "

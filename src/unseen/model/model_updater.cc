@@ -44,6 +44,10 @@ std::optional<Mesh> ModelUpdater::Collect(ModelBuild build) {
     return std::nullopt;
   }
   ++stats_.built;
+  if (build.alignment.ok) {
+    ++stats_.aligned;
+    stats_.correction_mm += 1e3 * build.alignment.shift_m;
+  }
   ++stats_.swapped;
   frames_since_model_ = 0;
   UNSEEN_LOG_DEBUG("model update: new model, {} triangles, {:.1f} ms", build.mesh->num_triangles(),
@@ -52,7 +56,7 @@ std::optional<Mesh> ModelUpdater::Collect(ModelBuild build) {
 }
 
 std::optional<Mesh> ModelUpdater::AfterFrame(const Frame& frame, const Rigid3d& world_from_obj,
-                                             double confidence) {
+                                             double confidence, const Mesh& current) {
   ++frames_since_model_;
   std::optional<Mesh> ready;
   if (pending_.valid() && pending_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
@@ -64,10 +68,13 @@ std::optional<Mesh> ModelUpdater::AfterFrame(const Frame& frame, const Rigid3d& 
   }
   ++stats_.started;
   frames_since_model_ = 0;  // the next attempt after every_frames more, built or not
-  if (!options_.asynchronous) return Collect(modeller_.Build(frame, world_from_obj, PixelRect()));
-  // The frame's images are shared, not copied: nothing writes to a frame once read.
-  pending_ = std::async(std::launch::async, [this, frame, world_from_obj] {
-    return modeller_.Build(frame, world_from_obj, PixelRect());
+  if (!options_.asynchronous) {
+    return Collect(modeller_.Build(frame, world_from_obj, PixelRect(), cv::Mat(), &current));
+  }
+  // The frame's images are shared, not copied: nothing writes to a frame once read. The
+  // model in use is copied (the tracker may swap it meanwhile).
+  pending_ = std::async(std::launch::async, [this, frame, world_from_obj, model = current] {
+    return modeller_.Build(frame, world_from_obj, PixelRect(), cv::Mat(), &model);
   });
   return ready;
 }

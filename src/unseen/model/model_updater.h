@@ -33,7 +33,9 @@ struct ModelUpdateOptions {
 
 struct ModelUpdateStats {
   int started = 0, built = 0, failed = 0, swapped = 0;
-  double build_ms = 0.0;  // summed over finished builds
+  double build_ms = 0.0;       // summed over finished builds
+  int aligned = 0;             // builds aligned to the model in use
+  double correction_mm = 0.0;  // summed shift of the surface by those alignments
   std::string last_failure;
 };
 
@@ -47,8 +49,10 @@ class ModelUpdater {
   // new model to swap in now (Tracker::SetModel) when a build has finished; starts a build
   // of this frame when one is due. A build that cannot model the frame is counted and
   // dropped (the model in use stays).
+  // `current`: the model in use (ModellerOptions::align_to_current aligns the new surface
+  // to it).
   std::optional<Mesh> AfterFrame(const Frame& frame, const Rigid3d& world_from_obj,
-                                 double confidence);
+                                 double confidence, const Mesh& current);
 
   const ModelUpdateStats& stats() const { return stats_; }
 

@@ -20,27 +20,37 @@ class ModelUpdates : public ::testing::Test {
   void SetUp() override {
     scene_ = MakeRigScene();
     options_.depth.source = DepthSourceKind::kSensor;
+    options_.align_to_current = true;  // exercised here: exact depth
     modeller_ = std::make_unique<Modeller>(scene_.rig, 0, options_);
+    const ModelBuild first = modeller_->Build(scene_.frame, scene_.world_from_obj, PixelRect());
+    ASSERT_TRUE(first.ok()) << first.why;
+    model_ = *first.mesh;
     update_.every_frames = 3;
     update_.asynchronous = false;
   }
   RigScene scene_;
   ModellerOptions options_;
   std::unique_ptr<Modeller> modeller_;
+  Mesh model_;  // the model in use
   ModelUpdateOptions update_;
 };
 
 TEST_F(ModelUpdates, EveryNthConfidentFrameGivesANewModel) {
   ModelUpdater updater(modeller_.get(), update_);
-  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0));
-  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0));
+  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0, model_));
+  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0, model_));
   // Due, but doubtful: waits for a confident frame.
-  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 0.3));
-  const std::optional<Mesh> model = updater.AfterFrame(scene_.frame, scene_.world_from_obj, 0.9);
+  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 0.3, model_));
+  const std::optional<Mesh> model =
+      updater.AfterFrame(scene_.frame, scene_.world_from_obj, 0.9, model_);
   ASSERT_TRUE(model.has_value());
   EXPECT_GT(model->num_triangles(), 30);
   EXPECT_EQ(updater.stats().built, 1);
-  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0));
+  // Built at the true pose on exact depth: aligned to the model in use, moved by no more
+  // than the model's chords are off the surface.
+  EXPECT_EQ(updater.stats().aligned, 1);
+  EXPECT_LT(updater.stats().correction_mm, 2.0);
+  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0, model_));
 }
 
 TEST_F(ModelUpdates, AFrameThatCannotBeModelledKeepsTheModelInUse) {
@@ -48,7 +58,7 @@ TEST_F(ModelUpdates, AFrameThatCannotBeModelledKeepsTheModelInUse) {
   Frame no_depth = scene_.frame;
   no_depth.depths[0] = cv::Mat(scene_.frame.depths[0].size(), CV_32FC1, cv::Scalar(0));
   for (int i = 0; i < 3; ++i)
-    EXPECT_FALSE(updater.AfterFrame(no_depth, scene_.world_from_obj, 1.0));
+    EXPECT_FALSE(updater.AfterFrame(no_depth, scene_.world_from_obj, 1.0, model_));
   EXPECT_EQ(updater.stats().started, 1);
   EXPECT_EQ(updater.stats().failed, 1);
   EXPECT_FALSE(updater.stats().last_failure.empty());
@@ -58,11 +68,11 @@ TEST_F(ModelUpdates, BuildsBesideTheTrackingAndHandsOverLater) {
   update_.asynchronous = true;
   update_.every_frames = 1;
   ModelUpdater updater(modeller_.get(), update_);
-  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0));  // started
+  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0, model_));  // started
   std::optional<Mesh> model;
   for (int i = 0; i < 200 && !model; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    model = updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0);
+    model = updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0, model_);
   }
   ASSERT_TRUE(model.has_value());
   EXPECT_EQ(updater.stats().started, 1);
@@ -72,7 +82,7 @@ TEST_F(ModelUpdates, NoneNeverRebuildsAndBadOptionsAreErrors) {
   update_.mode = ModelUpdateMode::kNone;
   ModelUpdater updater(modeller_.get(), update_);
   for (int i = 0; i < 10; ++i)
-    EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0));
+    EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0, model_));
   EXPECT_EQ(updater.stats().started, 0);
   EXPECT_THROW(ParseModelUpdateMode("incrementally"), Error);
   update_.every_frames = 0;

@@ -15,6 +15,7 @@ void ModellerOptions::Check() const {
   depth.Check();
   segmentation.Check();
   mesh.Check();
+  alignment.Check();
   UNSEEN_CHECK(origin_offset_m >= 0.0 && std::isfinite(origin_offset_m),
                "model.origin_offset_m {} must be >= 0", origin_offset_m);
 }
@@ -33,7 +34,8 @@ Modeller::Modeller(const Rig& rig, int reference, const ModellerOptions& options
 }
 
 ModelBuild Modeller::Build(const Frame& frame, const Rigid3d& world_from_obj,
-                           const PixelRect& region, const cv::Mat& mask) const {
+                           const PixelRect& region, const cv::Mat& mask,
+                           const Mesh* current) const {
   UNSEEN_CHECK(world_from_obj.IsValid(), "Modeller: object frame {} is not a valid pose",
                world_from_obj.ToString());
   const RigCamera& ref = rig_.cameras[reference_];
@@ -43,7 +45,8 @@ ModelBuild Modeller::Build(const Frame& frame, const Rigid3d& world_from_obj,
                "Modeller: mask is {}x{} type {}; expected {}x{} CV_8UC1", mask.cols, mask.rows,
                mask.type(), camera.width, camera.height);
   ModelBuild out;
-  const Rigid3d cam_from_obj = ref.cam_from_world() * world_from_obj;
+  out.world_from_obj = world_from_obj;
+  Rigid3d cam_from_obj = ref.cam_from_world() * world_from_obj;
   const Eigen::Vector3d origin = cam_from_obj.translation();
   const double radius = options_.segmentation.max_radius_m;
   if (origin.z() <= 0.0) {
@@ -84,6 +87,16 @@ ModelBuild Modeller::Build(const Frame& frame, const Rigid3d& world_from_obj,
   const cv::Mat image = frame.images[reference_].type() == CV_32FC3
                             ? frame.images[reference_]
                             : ToFloatBgr(frame.images[reference_], "reference image");
+  if (current && options_.align_to_current) {
+    out.alignment = AlignSurfaceToModel(out.depth.depth, out.mask, camera, *current, cam_from_obj,
+                                        options_.alignment);
+    if (out.alignment.ok) {
+      // The measured points p belong at correction * p: the object frame seen from the
+      // camera is correction^-1 * cam_from_obj.
+      cam_from_obj = out.alignment.cam_correction.Inverse() * cam_from_obj;
+      out.world_from_obj = ref.world_from_cam * cam_from_obj;
+    }
+  }
   std::string why;
   out.mesh = BuildSurfaceMesh(out.depth, image, camera, cam_from_obj, out.mask, options_.mesh,
                               &out.report, &why);

@@ -19,13 +19,13 @@ DepthSourceKind ParseSource(const std::string& text, const std::string& where) {
   }
 }
 
-ModellerOptions FromYaml(const YAML::Node& root, const std::string& what) {
-  ModellerOptions o;
+ModellerOptions FromYaml(const YAML::Node& root, const std::string& what, ModellerOptions o) {
   DepthExtractionOptions& d = o.depth;
   PlaneSweepOptions& ps = d.plane_sweep;
   StereoOptions& st = d.stereo;
   SegmentationOptions& sg = o.segmentation;
   SurfaceMeshOptions& me = o.mesh;
+  SurfaceAlignmentOptions& al = o.alignment;
   const std::map<std::string, YamlSection> sections = {
       {"depth",
        {{"source", YamlEnumField(&d.source, &ParseSource)},
@@ -68,7 +68,17 @@ ModellerOptions FromYaml(const YAML::Node& root, const std::string& what) {
         {"max_radius_m", YamlField(&me.max_radius_m)},
         {"max_depth_step", YamlField(&me.max_depth_step)},
         {"min_depth_step_m", YamlField(&me.min_depth_step_m)}}},
-      {"model", {{"origin_offset_m", YamlField(&o.origin_offset_m)}}},
+      {"model",
+       {{"origin_offset_m", YamlField(&o.origin_offset_m)},
+        {"align_to_current", YamlField(&o.align_to_current)}}},
+      {"alignment",
+       {{"iterations", YamlField(&al.iterations)},
+        {"max_distance_m", YamlField(&al.max_distance_m)},
+        {"huber_m", YamlField(&al.huber_m)},
+        {"min_points", YamlField(&al.min_points)},
+        {"damping", YamlField(&al.damping)},
+        {"max_correction_m", YamlField(&al.max_correction_m)},
+        {"max_correction_deg", YamlField(&al.max_correction_deg)}}},
   };
   ApplyYamlSections(root, what, sections);
   try {
@@ -88,11 +98,11 @@ ModellerOptions ParseModellerOptions(const std::string& yaml_text, const std::st
   } catch (const YAML::Exception& e) {
     ThrowError("{}: malformed YAML: {}", what, e.what());
   }
-  return FromYaml(root, what);
+  return FromYaml(root, what, ModellerOptions());
 }
 
-ModellerOptions LoadModellerOptions(const std::string& path) {
-  return FromYaml(LoadYamlFile(path, "modeller options"), path);
+ModellerOptions LoadModellerOptions(const std::string& path, const ModellerOptions& defaults) {
+  return FromYaml(LoadYamlFile(path, "modeller options"), path, defaults);
 }
 
 }  // namespace unseen
