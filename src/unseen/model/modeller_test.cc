@@ -170,6 +170,35 @@ TEST_F(ModellerScene, SegmentationSeparatesTheObjectFromTheWallBehindIt) {
   EXPECT_GT(double(cv::countNonZero(both)) / cv::countNonZero(either), 0.9);
 }
 
+TEST_F(ModellerScene, SparseDepthKeepsTheObjectAndDropsWrongMatchesAtItsDepth) {
+  const RigScene& s = *scene_;
+  const PinholeCamera& camera = s.rig.cameras[0].intrinsics;
+  const Eigen::Vector3d origin =
+      (s.rig.cameras[0].cam_from_world() * s.world_from_obj).translation();
+  // Depth as an image-based source leaves it: every third pixel of the cube, nothing of
+  // the wall, and a wrong match at the object's depth beside it (a small blob).
+  DepthMap map;
+  map.depth = cv::Mat(s.frame.depths[0].size(), CV_32FC1, cv::Scalar(0));
+  for (int y = 0; y < map.depth.rows; y += 3) {
+    for (int x = 0; x < map.depth.cols; x += 3) {
+      if (s.object_masks[0].at<uint8_t>(y, x))
+        map.depth.at<float>(y, x) = s.frame.depths[0].at<float>(y, x);
+    }
+  }
+  const cv::Rect box = cv::boundingRect(s.object_masks[0]);
+  const cv::Rect blob(box.x - 30, box.y + box.height / 2, 8, 8);
+  map.depth(blob).setTo(static_cast<float>(origin.z()));
+  SegmentationReport report;
+  const cv::Mat mask = SegmentObject(map, camera, ObjectRegion(50), origin, cv::Mat(),
+                                     SegmentationOptions(), &report);
+  EXPECT_FALSE(report.dense);
+  EXPECT_EQ(cv::countNonZero(mask(blob)), 0);
+  cv::Mat both, either;
+  cv::bitwise_and(mask, s.object_masks[0], both);
+  cv::bitwise_or(mask, s.object_masks[0], either);
+  EXPECT_GT(double(cv::countNonZero(both)) / cv::countNonZero(either), 0.8);
+}
+
 TEST_F(ModellerScene, WhatCannotBeModelledIsAStatusNotAnEmptyModel) {
   const RigScene& s = *scene_;
   ModellerOptions options;

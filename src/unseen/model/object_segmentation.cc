@@ -27,6 +27,10 @@ void SegmentationOptions::Check() const {
                "segmentation.min_plane_share {} must be in (0, 1]", min_plane_share);
   UNSEEN_CHECK(max_depth_step > 0.0 && std::isfinite(max_depth_step),
                "segmentation.max_depth_step {} must be > 0", max_depth_step);
+  UNSEEN_CHECK(sparse_gap_px >= 1 && sparse_gap_px <= 32,
+               "segmentation.sparse_gap_px {} must be in [1, 32]", sparse_gap_px);
+  UNSEEN_CHECK(sparse_fill_px >= 0 && sparse_fill_px <= 64,
+               "segmentation.sparse_fill_px {} must be in [0, 64]", sparse_fill_px);
   UNSEEN_CHECK(dense_share >= 0.0 && dense_share <= 1.0,
                "segmentation.dense_share {} must be in [0, 1]", dense_share);
 }
@@ -212,9 +216,9 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
       out.at<uint8_t>(px) = 0;
     }
   }
-  if (!rep.dense || cv::countNonZero(out) == 0) return out;
+  if (cv::countNonZero(out) == 0) return out;
 
-  // Connected in depth to the measured pixel nearest the origin.
+  // Dense depth: connected in depth to the measured pixel nearest the origin.
   int seed = -1;
   double seed_d = std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < points.size(); ++i) {
@@ -226,16 +230,71 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
     }
   }
   if (seed < 0) return out;
-  cv::Mat flood(size.height + 2, size.width + 2, CV_8UC1, cv::Scalar(1));
-  flood(cv::Rect(1, 1, size.width, size.height)).setTo(0, out);
-  const float step = static_cast<float>(options.max_depth_step * points[seed].z());
-  cv::Mat depth = depth_map.depth.clone();
-  cv::floodFill(depth, flood, pixels[seed], cv::Scalar(0), nullptr, cv::Scalar(step),
-                cv::Scalar(step), 8 | cv::FLOODFILL_MASK_ONLY | (255 << 8));
-  const cv::Mat connected = flood(cv::Rect(1, 1, size.width, size.height)) == 255;
-  const int before = cv::countNonZero(out);
-  out &= connected;
-  rep.unconnected = before - cv::countNonZero(out);
+  const int before = cv::countNonZero(out & (depth_map.depth > 0.0f));
+  if (rep.dense) {
+    cv::Mat flood(size.height + 2, size.width + 2, CV_8UC1, cv::Scalar(1));
+    flood(cv::Rect(1, 1, size.width, size.height)).setTo(0, out);
+    const float step = static_cast<float>(options.max_depth_step * points[seed].z());
+    cv::Mat depth = depth_map.depth.clone();
+    cv::floodFill(depth, flood, pixels[seed], cv::Scalar(0), nullptr, cv::Scalar(step),
+                  cv::Scalar(step), 8 | cv::FLOODFILL_MASK_ONLY | (255 << 8));
+    out &= flood(cv::Rect(1, 1, size.width, size.height)) == 255;
+    rep.unconnected = before - cv::countNonZero(out);
+    return out;
+  }
+  // Sparse depth (the image-based sources measure textured pixels only): the measured
+  // pixels connected across gaps of up to sparse_gap_px with depth steps below
+  // max_depth_step; of those components the largest that comes within half the radius of
+  // the origin is the object's, and the pixels within sparse_fill_px of it its area. Wrong
+  // matches on the background (a periodic pattern matches at many depths, some near the
+  // origin's) form small components of their own.
+  cv::Mat labels(size, CV_32SC1, cv::Scalar(0));
+  const int gap = options.sparse_gap_px;
+  int best_label = 0, best_count = 0;
+  int next_label = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!out.at<uint8_t>(pixels[i]) || labels.at<int>(pixels[i]) != 0) continue;
+    const int label = ++next_label;
+    std::vector<cv::Point> stack{pixels[i]};
+    labels.at<int>(pixels[i]) = label;
+    int count = 0;
+    bool near_origin = false;
+    while (!stack.empty()) {
+      const cv::Point p = stack.back();
+      stack.pop_back();
+      ++count;
+      const float z = depth_map.depth.at<float>(p);
+      near_origin =
+          near_origin || (camera.Unproject(Eigen::Vector2d(p.x, p.y), z) - origin_in_cam).norm() <
+                             0.5 * options.max_radius_m;
+      const float step = static_cast<float>(options.max_depth_step) * z;
+      for (int dy = -gap; dy <= gap; ++dy) {
+        for (int dx = -gap; dx <= gap; ++dx) {
+          const cv::Point q(p.x + dx, p.y + dy);
+          if (q.x < 0 || q.y < 0 || q.x >= size.width || q.y >= size.height) continue;
+          if (labels.at<int>(q) != 0 || !out.at<uint8_t>(q)) continue;
+          const float zq = depth_map.depth.at<float>(q);
+          if (!(zq > 0.0f) || std::abs(zq - z) > step) continue;
+          labels.at<int>(q) = label;
+          stack.push_back(q);
+        }
+      }
+    }
+    if (near_origin && count > best_count) {
+      best_count = count;
+      best_label = label;
+    }
+  }
+  const cv::Mat component = (labels == best_label) & (depth_map.depth > 0.0f);
+  const int reached = best_label > 0 ? best_count : 0;
+  rep.unconnected = before - reached;
+  cv::Mat area;
+  const int fill = options.sparse_fill_px;
+  cv::dilate(component, area,
+             cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * fill + 1, 2 * fill + 1)));
+  out &= area;
+  // Measured pixels inside the area that are not connected stay out.
+  out.setTo(0, (depth_map.depth > 0.0f) & ~component);
   return out;
 }
 

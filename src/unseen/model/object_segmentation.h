@@ -6,8 +6,9 @@
 // optional mask (the thresholded interest map, or any mask image) bound it; measured depth
 // narrows it to the object: within max_radius_m of the object's origin (a position
 // interest filter), off the dominant plane that reaches the region's rim (the table or
-// floor the object stands on), and — where the depth is dense, as a sensor's — connected
-// in depth to the surface nearest the origin (not a neighbouring object).
+// floor the object stands on), and connected in depth to the surface nearest the origin
+// (not a neighbouring object, not a wrong match on the background); where the depth is
+// sparse (image-based sources) across small gaps, the area around those pixels.
 #pragma once
 
 #include <Eigen/Core>
@@ -30,6 +31,10 @@ struct SegmentationOptions {
   // at least dense_share of the region's pixels have depth.
   double max_depth_step = 0.03;
   double dense_share = 0.5;
+  // Sparse depth: measured pixels connect across gaps of up to this many pixels, and the
+  // object's area reaches this far around them.
+  int sparse_gap_px = 8;
+  int sparse_fill_px = 6;
   void Check() const;
 };
 
