@@ -11,65 +11,6 @@
 
 namespace unseen {
 
-std::string ToString(DepthSourceKind kind) {
-  switch (kind) {
-    case DepthSourceKind::kPlaneSweep:
-      return "planesweep";
-    case DepthSourceKind::kStereo:
-      return "stereo";
-    case DepthSourceKind::kSensor:
-      return "sensor";
-  }
-  return "?";
-}
-
-DepthSourceKind ParseDepthSourceKind(const std::string& text) {
-  for (DepthSourceKind k :
-       {DepthSourceKind::kPlaneSweep, DepthSourceKind::kStereo, DepthSourceKind::kSensor}) {
-    if (text == ToString(k)) return k;
-  }
-  ThrowError("depth source '{}' is not one of planesweep, stereo, sensor", text);
-}
-
-void PlaneSweepOptions::Check() const {
-  UNSEEN_CHECK(planes >= 4 && planes <= 1024, "plane_sweep.planes {} must be in [4, 1024]", planes);
-  UNSEEN_CHECK(window_px >= 3 && window_px % 2 == 1 && window_px <= 31,
-               "plane_sweep.window_px {} must be odd and in [3, 31]", window_px);
-  UNSEEN_CHECK(best_share > 0.0 && best_share <= 1.0, "plane_sweep.best_share {} must be in (0, 1]",
-               best_share);
-  UNSEEN_CHECK(max_cost > 0.0 && max_cost <= 2.0, "plane_sweep.max_cost {} must be in (0, 2]",
-               max_cost);
-  UNSEEN_CHECK(uniqueness >= 0.0 && uniqueness < 1.0, "plane_sweep.uniqueness {} must be in [0, 1)",
-               uniqueness);
-  UNSEEN_CHECK(min_support >= 0 && min_support <= 24,
-               "plane_sweep.min_support {} must be in [0, 24]", min_support);
-  UNSEEN_CHECK(refine_iterations >= 0 && refine_iterations <= 10,
-               "plane_sweep.refine_iterations {} must be in [0, 10]", refine_iterations);
-  UNSEEN_CHECK(smoothness >= 0.0 && std::isfinite(smoothness),
-               "plane_sweep.smoothness {} must be >= 0", smoothness);
-}
-
-void StereoOptions::Check() const {
-  UNSEEN_CHECK(num_disparities >= 16 && num_disparities % 16 == 0 && num_disparities <= 512,
-               "stereo.num_disparities {} must be a multiple of 16 in [16, 512]", num_disparities);
-  UNSEEN_CHECK(block_size >= 3 && block_size % 2 == 1 && block_size <= 21,
-               "stereo.block_size {} must be odd and in [3, 21]", block_size);
-  UNSEEN_CHECK(uniqueness_ratio >= 0 && uniqueness_ratio <= 100,
-               "stereo.uniqueness_ratio {} must be in [0, 100]", uniqueness_ratio);
-  UNSEEN_CHECK(speckle_window >= 0, "stereo.speckle_window {} must be >= 0", speckle_window);
-  UNSEEN_CHECK(speckle_range >= 1, "stereo.speckle_range {} must be >= 1", speckle_range);
-}
-
-void DepthExtractionOptions::Check() const {
-  UNSEEN_CHECK(min_depth_m > 0.0 && std::isfinite(min_depth_m), "depth.min_depth_m {} must be > 0",
-               min_depth_m);
-  UNSEEN_CHECK(max_depth_m > min_depth_m && std::isfinite(max_depth_m),
-               "depth.max_depth_m {} must be > min_depth_m {}", max_depth_m, min_depth_m);
-  UNSEEN_CHECK(min_texturedness >= 0.0 && std::isfinite(min_texturedness),
-               "depth.min_texturedness {} must be >= 0", min_texturedness);
-  plane_sweep.Check();
-  stereo.Check();
-}
 
 int DepthMap::ValidPixels() const { return depth.empty() ? 0 : cv::countNonZero(depth > 0.0f); }
 

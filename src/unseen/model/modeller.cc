@@ -11,14 +11,6 @@
 
 namespace unseen {
 
-void ModellerOptions::Check() const {
-  depth.Check();
-  segmentation.Check();
-  mesh.Check();
-  alignment.Check();
-  UNSEEN_CHECK(origin_offset_m >= 0.0 && std::isfinite(origin_offset_m),
-               "model.origin_offset_m {} must be >= 0", origin_offset_m);
-}
 
 Modeller::Modeller(const Rig& rig, int reference, const ModellerOptions& options)
     : rig_(rig), reference_(reference), options_(options) {

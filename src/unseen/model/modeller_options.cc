@@ -1,6 +1,10 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 //
-// ModellerOptions from YAML: sections depth, plane_sweep, stereo, segmentation, mesh, model.
+// The modeller's options: every options struct's Check (kept apart from the code that uses
+// them, so that the YAML reader builds alone: fuzz/model_options_fuzzer.cc) and their
+// reading from YAML (sections depth, plane_sweep, stereo, segmentation, mesh, model,
+// alignment).
+#include <cmath>
 #include <map>
 #include <string>
 
@@ -9,6 +13,127 @@
 #include "unseen/util/yaml_options.h"
 
 namespace unseen {
+
+std::string ToString(DepthSourceKind kind) {
+  switch (kind) {
+    case DepthSourceKind::kPlaneSweep:
+      return "planesweep";
+    case DepthSourceKind::kStereo:
+      return "stereo";
+    case DepthSourceKind::kSensor:
+      return "sensor";
+  }
+  return "?";
+}
+
+DepthSourceKind ParseDepthSourceKind(const std::string& text) {
+  for (DepthSourceKind k :
+       {DepthSourceKind::kPlaneSweep, DepthSourceKind::kStereo, DepthSourceKind::kSensor}) {
+    if (text == ToString(k)) return k;
+  }
+  ThrowError("depth source '{}' is not one of planesweep, stereo, sensor", text);
+}
+
+void PlaneSweepOptions::Check() const {
+  UNSEEN_CHECK(planes >= 4 && planes <= 1024, "plane_sweep.planes {} must be in [4, 1024]", planes);
+  UNSEEN_CHECK(window_px >= 3 && window_px % 2 == 1 && window_px <= 31,
+               "plane_sweep.window_px {} must be odd and in [3, 31]", window_px);
+  UNSEEN_CHECK(best_share > 0.0 && best_share <= 1.0, "plane_sweep.best_share {} must be in (0, 1]",
+               best_share);
+  UNSEEN_CHECK(max_cost > 0.0 && max_cost <= 2.0, "plane_sweep.max_cost {} must be in (0, 2]",
+               max_cost);
+  UNSEEN_CHECK(uniqueness >= 0.0 && uniqueness < 1.0, "plane_sweep.uniqueness {} must be in [0, 1)",
+               uniqueness);
+  UNSEEN_CHECK(min_support >= 0 && min_support <= 24,
+               "plane_sweep.min_support {} must be in [0, 24]", min_support);
+  UNSEEN_CHECK(refine_iterations >= 0 && refine_iterations <= 10,
+               "plane_sweep.refine_iterations {} must be in [0, 10]", refine_iterations);
+  UNSEEN_CHECK(smoothness >= 0.0 && std::isfinite(smoothness),
+               "plane_sweep.smoothness {} must be >= 0", smoothness);
+}
+
+void StereoOptions::Check() const {
+  UNSEEN_CHECK(num_disparities >= 16 && num_disparities % 16 == 0 && num_disparities <= 512,
+               "stereo.num_disparities {} must be a multiple of 16 in [16, 512]", num_disparities);
+  UNSEEN_CHECK(block_size >= 3 && block_size % 2 == 1 && block_size <= 21,
+               "stereo.block_size {} must be odd and in [3, 21]", block_size);
+  UNSEEN_CHECK(uniqueness_ratio >= 0 && uniqueness_ratio <= 100,
+               "stereo.uniqueness_ratio {} must be in [0, 100]", uniqueness_ratio);
+  UNSEEN_CHECK(speckle_window >= 0, "stereo.speckle_window {} must be >= 0", speckle_window);
+  UNSEEN_CHECK(speckle_range >= 1, "stereo.speckle_range {} must be >= 1", speckle_range);
+}
+
+void DepthExtractionOptions::Check() const {
+  UNSEEN_CHECK(min_depth_m > 0.0 && std::isfinite(min_depth_m), "depth.min_depth_m {} must be > 0",
+               min_depth_m);
+  UNSEEN_CHECK(max_depth_m > min_depth_m && std::isfinite(max_depth_m),
+               "depth.max_depth_m {} must be > min_depth_m {}", max_depth_m, min_depth_m);
+  UNSEEN_CHECK(min_texturedness >= 0.0 && std::isfinite(min_texturedness),
+               "depth.min_texturedness {} must be >= 0", min_texturedness);
+  plane_sweep.Check();
+  stereo.Check();
+}
+
+void SegmentationOptions::Check() const {
+  UNSEEN_CHECK(max_radius_m > 0.0 && std::isfinite(max_radius_m),
+               "segmentation.max_radius_m {} must be > 0", max_radius_m);
+  UNSEEN_CHECK(plane_tolerance_m > 0.0 && std::isfinite(plane_tolerance_m),
+               "segmentation.plane_tolerance_m {} must be > 0", plane_tolerance_m);
+  UNSEEN_CHECK(plane_normal_deg > 0.0 && plane_normal_deg <= 90.0,
+               "segmentation.plane_normal_deg {} must be in (0, 90]", plane_normal_deg);
+  UNSEEN_CHECK(plane_iterations >= 1 && plane_iterations <= 100000,
+               "segmentation.plane_iterations {} must be in [1, 100000]", plane_iterations);
+  UNSEEN_CHECK(min_plane_share > 0.0 && min_plane_share <= 1.0,
+               "segmentation.min_plane_share {} must be in (0, 1]", min_plane_share);
+  UNSEEN_CHECK(max_depth_step > 0.0 && std::isfinite(max_depth_step),
+               "segmentation.max_depth_step {} must be > 0", max_depth_step);
+  UNSEEN_CHECK(sparse_gap_px >= 1 && sparse_gap_px <= 32,
+               "segmentation.sparse_gap_px {} must be in [1, 32]", sparse_gap_px);
+  UNSEEN_CHECK(sparse_fill_px >= 0 && sparse_fill_px <= 64,
+               "segmentation.sparse_fill_px {} must be in [0, 64]", sparse_fill_px);
+  UNSEEN_CHECK(dense_share >= 0.0 && dense_share <= 1.0,
+               "segmentation.dense_share {} must be in [0, 1]", dense_share);
+}
+
+void SurfaceMeshOptions::Check() const {
+  UNSEEN_CHECK(median_px == 1 || median_px == 3 || median_px == 5,
+               "mesh.median_px {} must be 1, 3 or 5", median_px);
+  UNSEEN_CHECK(cell_px >= 3 && cell_px <= 256, "mesh.cell_px {} must be in [3, 256]", cell_px);
+  UNSEEN_CHECK(min_texturedness >= 0.0 && std::isfinite(min_texturedness),
+               "mesh.min_texturedness {} must be >= 0", min_texturedness);
+  UNSEEN_CHECK(harris_k > 0.0 && harris_k < 0.25, "mesh.harris_k {} must be in (0, 0.25)",
+               harris_k);
+  UNSEEN_CHECK(harris_quality > 0.0 && harris_quality <= 1.0,
+               "mesh.harris_quality {} must be in (0, 1]", harris_quality);
+  UNSEEN_CHECK(max_radius_m >= 0.0 && std::isfinite(max_radius_m),
+               "mesh.max_radius_m {} must be >= 0", max_radius_m);
+  UNSEEN_CHECK(max_depth_step > 0.0 && std::isfinite(max_depth_step),
+               "mesh.max_depth_step {} must be > 0", max_depth_step);
+  UNSEEN_CHECK(min_depth_step_m >= 0.0 && std::isfinite(min_depth_step_m),
+               "mesh.min_depth_step_m {} must be >= 0", min_depth_step_m);
+}
+
+void SurfaceAlignmentOptions::Check() const {
+  UNSEEN_CHECK(iterations >= 1 && iterations <= 100, "alignment.iterations {} must be in [1, 100]",
+               iterations);
+  UNSEEN_CHECK(max_distance_m > 0.0, "alignment.max_distance_m {} must be > 0", max_distance_m);
+  UNSEEN_CHECK(huber_m > 0.0, "alignment.huber_m {} must be > 0", huber_m);
+  UNSEEN_CHECK(min_points >= 6, "alignment.min_points {} must be >= 6", min_points);
+  UNSEEN_CHECK(damping >= 0.0 && damping < 1.0, "alignment.damping {} must be in [0, 1)", damping);
+  UNSEEN_CHECK(max_correction_m > 0.0 && max_correction_deg > 0.0,
+               "alignment.max_correction_m {} and max_correction_deg {} must be > 0",
+               max_correction_m, max_correction_deg);
+}
+
+void ModellerOptions::Check() const {
+  depth.Check();
+  segmentation.Check();
+  mesh.Check();
+  alignment.Check();
+  UNSEEN_CHECK(origin_offset_m >= 0.0 && std::isfinite(origin_offset_m),
+               "model.origin_offset_m {} must be >= 0", origin_offset_m);
+}
+
 namespace {
 
 DepthSourceKind ParseSource(const std::string& text, const std::string& where) {

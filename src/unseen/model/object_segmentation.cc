@@ -14,26 +14,6 @@
 
 namespace unseen {
 
-void SegmentationOptions::Check() const {
-  UNSEEN_CHECK(max_radius_m > 0.0 && std::isfinite(max_radius_m),
-               "segmentation.max_radius_m {} must be > 0", max_radius_m);
-  UNSEEN_CHECK(plane_tolerance_m > 0.0 && std::isfinite(plane_tolerance_m),
-               "segmentation.plane_tolerance_m {} must be > 0", plane_tolerance_m);
-  UNSEEN_CHECK(plane_normal_deg > 0.0 && plane_normal_deg <= 90.0,
-               "segmentation.plane_normal_deg {} must be in (0, 90]", plane_normal_deg);
-  UNSEEN_CHECK(plane_iterations >= 1 && plane_iterations <= 100000,
-               "segmentation.plane_iterations {} must be in [1, 100000]", plane_iterations);
-  UNSEEN_CHECK(min_plane_share > 0.0 && min_plane_share <= 1.0,
-               "segmentation.min_plane_share {} must be in (0, 1]", min_plane_share);
-  UNSEEN_CHECK(max_depth_step > 0.0 && std::isfinite(max_depth_step),
-               "segmentation.max_depth_step {} must be > 0", max_depth_step);
-  UNSEEN_CHECK(sparse_gap_px >= 1 && sparse_gap_px <= 32,
-               "segmentation.sparse_gap_px {} must be in [1, 32]", sparse_gap_px);
-  UNSEEN_CHECK(sparse_fill_px >= 0 && sparse_fill_px <= 64,
-               "segmentation.sparse_fill_px {} must be in [0, 64]", sparse_fill_px);
-  UNSEEN_CHECK(dense_share >= 0.0 && dense_share <= 1.0,
-               "segmentation.dense_share {} must be in [0, 1]", dense_share);
-}
 
 namespace {
 

@@ -11,17 +11,6 @@
 
 namespace unseen {
 
-void SurfaceAlignmentOptions::Check() const {
-  UNSEEN_CHECK(iterations >= 1 && iterations <= 100, "alignment.iterations {} must be in [1, 100]",
-               iterations);
-  UNSEEN_CHECK(max_distance_m > 0.0, "alignment.max_distance_m {} must be > 0", max_distance_m);
-  UNSEEN_CHECK(huber_m > 0.0, "alignment.huber_m {} must be > 0", huber_m);
-  UNSEEN_CHECK(min_points >= 6, "alignment.min_points {} must be >= 6", min_points);
-  UNSEEN_CHECK(damping >= 0.0 && damping < 1.0, "alignment.damping {} must be in [0, 1)", damping);
-  UNSEEN_CHECK(max_correction_m > 0.0 && max_correction_deg > 0.0,
-               "alignment.max_correction_m {} and max_correction_deg {} must be > 0",
-               max_correction_m, max_correction_deg);
-}
 
 SurfaceAlignment AlignSurfaceToModel(const cv::Mat& depth, const cv::Mat& mask,
                                      const PinholeCamera& camera, const Mesh& model,

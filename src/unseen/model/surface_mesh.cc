@@ -13,23 +13,6 @@
 
 namespace unseen {
 
-void SurfaceMeshOptions::Check() const {
-  UNSEEN_CHECK(median_px == 1 || median_px == 3 || median_px == 5,
-               "mesh.median_px {} must be 1, 3 or 5", median_px);
-  UNSEEN_CHECK(cell_px >= 3 && cell_px <= 256, "mesh.cell_px {} must be in [3, 256]", cell_px);
-  UNSEEN_CHECK(min_texturedness >= 0.0 && std::isfinite(min_texturedness),
-               "mesh.min_texturedness {} must be >= 0", min_texturedness);
-  UNSEEN_CHECK(harris_k > 0.0 && harris_k < 0.25, "mesh.harris_k {} must be in (0, 0.25)",
-               harris_k);
-  UNSEEN_CHECK(harris_quality > 0.0 && harris_quality <= 1.0,
-               "mesh.harris_quality {} must be in (0, 1]", harris_quality);
-  UNSEEN_CHECK(max_radius_m >= 0.0 && std::isfinite(max_radius_m),
-               "mesh.max_radius_m {} must be >= 0", max_radius_m);
-  UNSEEN_CHECK(max_depth_step > 0.0 && std::isfinite(max_depth_step),
-               "mesh.max_depth_step {} must be > 0", max_depth_step);
-  UNSEEN_CHECK(min_depth_step_m >= 0.0 && std::isfinite(min_depth_step_m),
-               "mesh.min_depth_step_m {} must be >= 0", min_depth_step_m);
-}
 
 namespace {
 
