@@ -109,12 +109,7 @@ TrackRow Track(const Sequence& sequence, const Modeller* modeller, std::optional
     const Frame frame = sequence.ReadFrame(i);
     Timer timer;
     const TrackResult r = tracker.Track(frame);
-    if (updater && r.status == TrackStatus::kTracking) {
-      if (std::optional<Mesh> next =
-              updater->AfterFrame(frame, r.world_from_obj, r.confidence, tracker.model())) {
-        tracker.SetModel(std::move(*next));
-      }
-    }
+    if (updater) updater->AfterTracked(frame, r, &tracker);
     records.push_back(r.ToPoseRecord(frame.frame_id, frame.time_s, timer.ElapsedMilliseconds()));
   }
   if (updater) row.rebuilds = updater->stats().swapped;

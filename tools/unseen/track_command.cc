@@ -220,13 +220,8 @@ void RunTrack(const TrackArgs& args) {
     if (image_missing) ++unreadable;
     Timer timer;
     const TrackResult r = tracker.Track(frame);
-    if (updater && r.status == TrackStatus::kTracking) {
-      // A model built beside the tracking takes over at this frame boundary.
-      if (std::optional<Mesh> next =
-              updater->AfterFrame(frame, r.world_from_obj, r.confidence, tracker.model())) {
-        tracker.SetModel(std::move(*next));
-      }
-    }
+    // A model built beside the tracking takes over at this frame boundary.
+    if (updater) updater->AfterTracked(frame, r, &tracker);
     const double ms = timer.ElapsedMilliseconds();
     sum_process_ms += ms;
     sum_times += r.summary.times;

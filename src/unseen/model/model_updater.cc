@@ -79,4 +79,13 @@ std::optional<Mesh> ModelUpdater::AfterFrame(const Frame& frame, const Rigid3d& 
   return ready;
 }
 
+bool ModelUpdater::AfterTracked(const Frame& frame, const TrackResult& result, Tracker* tracker) {
+  if (result.status != TrackStatus::kTracking) return false;
+  std::optional<Mesh> next =
+      AfterFrame(frame, result.world_from_obj, result.confidence, tracker->model());
+  if (!next) return false;
+  tracker->SetModel(std::move(*next));
+  return true;
+}
+
 }  // namespace unseen

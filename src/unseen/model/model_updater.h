@@ -14,6 +14,7 @@
 
 #include "unseen/mesh/mesh.h"
 #include "unseen/model/modeller.h"
+#include "unseen/track/tracker.h"
 
 namespace unseen {
 
@@ -53,6 +54,11 @@ class ModelUpdater {
   // to it).
   std::optional<Mesh> AfterFrame(const Frame& frame, const Rigid3d& world_from_obj,
                                  double confidence, const Mesh& current);
+
+  // AfterFrame for the frame `tracker` just tracked (`result`), when it tracked it: a model
+  // that is ready replaces the tracker's (Tracker::SetModel) at this frame boundary. True
+  // when it did.
+  bool AfterTracked(const Frame& frame, const TrackResult& result, Tracker* tracker);
 
   const ModelUpdateStats& stats() const { return stats_; }
 

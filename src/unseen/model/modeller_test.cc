@@ -22,6 +22,14 @@ using testing::RigScene;
 
 constexpr double kDeg = M_PI / 180.0;
 
+// Intersection over union of two masks (CV_8UC1).
+double Iou(const cv::Mat& a, const cv::Mat& b) {
+  cv::Mat both, either;
+  cv::bitwise_and(a, b, both);
+  cv::bitwise_or(a, b, either);
+  return double(cv::countNonZero(both)) / cv::countNonZero(either);
+}
+
 class ModellerScene : public ::testing::TestWithParam<DepthSourceKind> {
  protected:
   static void SetUpTestSuite() { scene_ = new RigScene(MakeRigScene()); }
@@ -130,12 +138,7 @@ TEST_F(ModellerScene, SegmentationDropsTheFloorTheObjectStandsOn) {
                                      cv::Mat(), SegmentationOptions(), &report);
   EXPECT_TRUE(report.plane_found);
   EXPECT_GT(report.on_plane, 0);
-  auto iou = [&](const cv::Mat& m) {
-    cv::Mat both, either;
-    cv::bitwise_and(m, cube_buffers.mask, both);
-    cv::bitwise_or(m, cube_buffers.mask, either);
-    return double(cv::countNonZero(both)) / cv::countNonZero(either);
-  };
+  auto iou = [&](const cv::Mat& m) { return Iou(m, cube_buffers.mask); };
   EXPECT_GT(iou(mask), 0.9);
   // Without the plane the floor is connected to the cube and stays.
   SegmentationOptions no_plane;
@@ -164,10 +167,7 @@ TEST_F(ModellerScene, SegmentationSeparatesTheObjectFromTheWallBehindIt) {
   EXPECT_TRUE(report.dense);
   EXPECT_FALSE(report.plane_found);
   EXPECT_GT(report.unconnected, 0);
-  cv::Mat both, either;
-  cv::bitwise_and(mask, s.object_masks[0], both);
-  cv::bitwise_or(mask, s.object_masks[0], either);
-  EXPECT_GT(double(cv::countNonZero(both)) / cv::countNonZero(either), 0.9);
+  EXPECT_GT(Iou(mask, s.object_masks[0]), 0.9);
 }
 
 TEST_F(ModellerScene, SparseDepthKeepsTheObjectAndDropsWrongMatchesAtItsDepth) {
@@ -193,10 +193,7 @@ TEST_F(ModellerScene, SparseDepthKeepsTheObjectAndDropsWrongMatchesAtItsDepth) {
                                      SegmentationOptions(), &report);
   EXPECT_FALSE(report.dense);
   EXPECT_EQ(cv::countNonZero(mask(blob)), 0);
-  cv::Mat both, either;
-  cv::bitwise_and(mask, s.object_masks[0], both);
-  cv::bitwise_or(mask, s.object_masks[0], either);
-  EXPECT_GT(double(cv::countNonZero(both)) / cv::countNonZero(either), 0.8);
+  EXPECT_GT(Iou(mask, s.object_masks[0]), 0.8);
 }
 
 TEST_F(ModellerScene, WhatCannotBeModelledIsAStatusNotAnEmptyModel) {
