@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
+#include <utility>
 
 #include "unseen/util/error.h"
 
@@ -104,6 +106,33 @@ void Mesh::Scale(float s) {
   for (Eigen::Vector3f& v : vertices) v *= s;
   for (Projector& p : projectors) {
     p.cam_from_obj.set_translation(p.cam_from_obj.translation() * static_cast<double>(s));
+    if (!p.depth.empty()) p.depth *= s;
+    p.depth_tolerance_m *= s;
+  }
+}
+
+void Mesh::RemoveUnusedVertices() {
+  std::vector<int> new_index(vertices.size(), -1);
+  int used = 0;
+  for (const Eigen::Vector3i& t : triangles) {
+    for (int k = 0; k < 3; ++k) {
+      if (new_index[t[k]] < 0) new_index[t[k]] = used++;
+    }
+  }
+  auto keep = [&](auto& attribute) {
+    if (attribute.empty()) return;
+    std::remove_reference_t<decltype(attribute)> kept(used);
+    for (size_t i = 0; i < new_index.size(); ++i) {
+      if (new_index[i] >= 0) kept[new_index[i]] = attribute[i];
+    }
+    attribute = std::move(kept);
+  };
+  keep(vertices);
+  keep(normals);
+  keep(uvs);
+  keep(colors_bgr);
+  for (Eigen::Vector3i& t : triangles) {
+    for (int k = 0; k < 3; ++k) t[k] = new_index[t[k]];
   }
 }
 

@@ -66,10 +66,12 @@ struct Mesh {
   // Axis-aligned bounds.
   void BoundingBox(Eigen::Vector3f* min, Eigen::Vector3f* max) const;
 
-  // Multiplies vertex positions (and projector translations) by s.
+  // Multiplies vertex positions (and projector translations and depths) by s.
   void Scale(float s);
   // Area-weighted vertex normals from the triangles.
   void ComputeNormals();
+  // Drops the vertices no triangle uses, with their attributes; renumbers the triangles.
+  void RemoveUnusedVertices();
 };
 
 }  // namespace unseen

@@ -829,6 +829,12 @@ TEST_F(MeshIoTest, ProjectorsRoundTrip) {
         Eigen::Vector3d(0.01, -0.02, 0.3 + i));
     p.image = cv::Mat(p.camera.height, p.camera.width, CV_32FC3);
     cv::randu(p.image, 0.0, 1.0);
+    if (i == 1) {  // the surface it saw: 0.2-0.5 m, none in the first column
+      p.depth = cv::Mat(p.camera.height, p.camera.width, CV_32FC1);
+      cv::randu(p.depth, 0.2, 0.5);
+      p.depth.col(0).setTo(0.0f);
+      p.depth_tolerance_m = 0.004f;
+    }
     mesh.projectors.push_back(p);
   }
   for (const char* name : {"proj.ply", "proj.obj"}) {
@@ -849,6 +855,12 @@ TEST_F(MeshIoTest, ProjectorsRoundTrip) {
       EXPECT_LT(d.translation, 1e-7);
       EXPECT_LT(d.rotation_rad, 1e-9);
       EXPECT_LE(cv::norm(a.image, b.image, cv::NORM_INF), 0.5 / 255 + 1e-6);
+      ASSERT_EQ(a.depth.empty(), b.depth.empty());
+      if (!a.depth.empty()) {
+        EXPECT_LE(cv::norm(a.depth, b.depth, cv::NORM_INF), 1e-5);  // 60 000 counts to 0.5 m
+        EXPECT_EQ(b.depth.at<float>(3, 0), 0.0f);
+        EXPECT_NEAR(b.depth_tolerance_m, 0.004f, 1e-7f);
+      }
     }
   }
   // Saving a mesh without projectors removes a stale projector file.

@@ -150,14 +150,18 @@ TEST(MeshNormals, IsolatedVertexGetsAUnitNormal) {
   EXPECT_NEAR(mesh.normals[4].norm(), 1.0f, 1e-6f);
 }
 
-TEST(MeshScale, ScalesVerticesAndProjectorTranslations) {
+TEST(MeshScale, ScalesVerticesAndProjectorTranslationsAndDepths) {
   Mesh mesh = Tetrahedron();
   Projector p;
   p.cam_from_obj = Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitY())),
                            Eigen::Vector3d(10, 20, 300));
+  p.depth = cv::Mat(2, 2, CV_32FC1, cv::Scalar(400.0f));
+  p.depth_tolerance_m = 3.0f;
   mesh.projectors.push_back(p);
   mesh.Scale(0.001f);
   EXPECT_TRUE(mesh.vertices[1].isApprox(Eigen::Vector3f(0.001f, 0, 0)));
+  EXPECT_FLOAT_EQ(mesh.projectors[0].depth.at<float>(1, 1), 0.4f);
+  EXPECT_FLOAT_EQ(mesh.projectors[0].depth_tolerance_m, 0.003f);
   EXPECT_TRUE(mesh.projectors[0].cam_from_obj.translation().isApprox(
       Eigen::Vector3d(0.01, 0.02, 0.3), 1e-6));
   EXPECT_TRUE(mesh.projectors[0].cam_from_obj.rotation().isApprox(p.cam_from_obj.rotation()));

@@ -3,8 +3,12 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <system_error>
 #include <utility>
@@ -105,6 +109,23 @@ std::vector<Projector> ReadProjectors(const fs::path& json_path) {
     UNSEEN_CHECK(projector.image.cols == cam.width && projector.image.rows == cam.height,
                  "{}: {}.image '{}' is {}x{} but the camera is {}x{}", file, where, image_name,
                  projector.image.cols, projector.image.rows, cam.width, cam.height);
+    if (p.contains("depth")) {
+      // The surface the projector saw (self-occlusion), 16-bit, in the mesh file's units.
+      const std::string depth_name = GetField<std::string>(p, "depth", file, where);
+      const double depth_scale = GetField<double>(p, "depth_scale", file, where);
+      const double tolerance = GetField<double>(p, "depth_tolerance", file, where);
+      UNSEEN_CHECK(depth_scale > 0.0 && std::isfinite(depth_scale) && tolerance >= 0.0 &&
+                       std::isfinite(tolerance),
+                   "{}: {}.depth_scale {} must be > 0 and depth_tolerance {} >= 0", file, where,
+                   depth_scale, tolerance);
+      const fs::path depth_path = json_path.parent_path() / depth_name;
+      const cv::Mat depth = cv::imread(depth_path.string(), cv::IMREAD_ANYDEPTH);
+      UNSEEN_CHECK(depth.type() == CV_16UC1 && depth.cols == cam.width && depth.rows == cam.height,
+                   "{}: {}.depth '{}' must be a 16-bit image of the camera's {}x{} pixels", file,
+                   where, depth_path.string(), cam.width, cam.height);
+      depth.convertTo(projector.depth, CV_32FC1, depth_scale);
+      projector.depth_tolerance_m = static_cast<float>(tolerance);  // file units until Scale
+    }
     projectors.push_back(std::move(projector));
   }
   return projectors;
@@ -136,12 +157,30 @@ void SaveProjectors(const Mesh& mesh, const fs::path& mesh_path, float scale) {
         {"rotation",
          {{r(0, 0), r(0, 1), r(0, 2)}, {r(1, 0), r(1, 1), r(1, 2)}, {r(2, 0), r(2, 1), r(2, 2)}}},
         {"translation", {t.x(), t.y(), t.z()}}};
-    list.push_back({{"image", image_name}, {"camera", camera}, {"cam_from_obj", pose}});
+    json entry = {{"image", image_name}, {"camera", camera}, {"cam_from_obj", pose}};
+    if (!p.depth.empty()) {
+      double max_depth = 0.0;
+      cv::minMaxLoc(p.depth, nullptr, &max_depth);
+      // File units per count: the farthest point at 60 000 counts.
+      const double depth_scale = std::max(max_depth * scale / 60000.0, 1e-9);
+      cv::Mat counts;
+      p.depth.convertTo(counts, CV_16UC1, scale / depth_scale);
+      const std::string depth_name =
+          fmt::format("{}_projector_{:03d}_depth.png", mesh_path.stem().string(), i);
+      const std::string depth_path = (mesh_path.parent_path() / depth_name).string();
+      UNSEEN_CHECK(cv::imwrite(depth_path, counts), "{}: cannot write", depth_path);
+      entry["depth"] = depth_name;
+      entry["depth_scale"] = depth_scale;
+      entry["depth_tolerance"] = p.depth_tolerance_m * scale;
+    }
+    list.push_back(entry);
   }
   json root = {
       {"comment", "Projective textures of " + mesh_path.filename().string() +
-                      ": image, pinhole intrinsics (pixels, pixel-centre origin) and "
-                      "cam_from_obj (rotation row-major, translation in the mesh file's units)"},
+                      ": image, pinhole intrinsics (pixels, pixel-centre origin), "
+                      "cam_from_obj (rotation row-major, translation in the mesh file's units) "
+                      "and optionally the depth it saw (16-bit PNG; count x depth_scale = the "
+                      "mesh file's units) with its occlusion tolerance"},
       {"projectors", list}};
   std::ofstream out(json_path);
   UNSEEN_CHECK(out.good(), "{}: cannot open for writing", json_path.string());
