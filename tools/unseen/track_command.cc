@@ -135,7 +135,6 @@ void RunTrack(const TrackArgs& args) {
     UNSEEN_LOG_INFO("track: on-line model from frame {}: {} triangles ({}, {:.1f} ms)",
                     first.frame_id, build.mesh->num_triangles(),
                     ToString(model_options.depth.source), build.depth_ms + build.mesh_ms);
-    model = *build.mesh;
     unknown_start = start.world_from_obj;
     ModelUpdateOptions update;
     try {
@@ -151,6 +150,7 @@ void RunTrack(const TrackArgs& args) {
       ThrowError("track: --update-frames: {}", e.what());
     }
     updater = std::make_unique<ModelUpdater>(modeller.get(), update);
+    model = updater->Start(build);
   } else if (args.model.empty()) {
     UNSEEN_CHECK(!sequence.model_path().empty(),
                  "track: sequence '{}' has no model; give one with --model", args.sequence);
@@ -261,9 +261,16 @@ void RunTrack(const TrackArgs& args) {
         "use, mean correction %.1f mm), %d could not model (%.1f ms per build)\n",
         u.started, u.swapped, u.aligned, u.aligned ? u.correction_mm / u.aligned : 0.0, u.failed,
         u.built + u.failed > 0 ? u.build_ms / (u.built + u.failed) : 0.0);
+    if (u.fusion.fused > 0) {
+      std::printf(
+          "  fused model: %d depth maps in %.1f mm voxels, %d key views, %d triangles "
+          "(last fusion %.1f ms)\n",
+          u.fusion.fused, u.fusion.voxel_mm, u.fusion.key_views, u.fusion.triangles,
+          u.fusion.fuse_ms);
+    }
   }
   if (!args.save_model.empty()) {
-    SaveMesh(tracker.model(), args.save_model, 1000.0);
+    SaveMesh(tracker.given_model(), args.save_model, 1000.0);
     std::printf("  model in use saved to %s (mm)\n", args.save_model.c_str());
   }
   if (unreadable > 0) {
@@ -320,7 +327,8 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_option("--model-config", args->object.model_config,
                   "--unknown: modeller options (YAML)");
   cmd->add_option("--update", args->update,
-                  "--unknown: model update, periodic (rebuild every --update-frames) or none");
+                  "--unknown: model update: periodic (rebuild every --update-frames), incremental "
+                  "(fuse every --update-frames into one growing model) or none");
   cmd->add_option("--update-frames", args->update_frames,
                   "--unknown: frames between model rebuilds");
   cmd->add_flag("--update-in-frame", args->update_in_frame,

@@ -92,6 +92,26 @@ TEST_F(ModelCli, TracksAnUnknownObjectFromItsRegionOrTheTruth) {
   }
 }
 
+TEST_F(ModelCli, AFusedModelGrowsAndTracksTheSequenceFromTheStart) {
+  const std::string poses = TempPath("fused.csv"), saved = TempPath("fused/model.ply");
+  fs::remove_all(TempPath("fused"));
+  const testing::CliResult r =
+      RunCli(fmt::format("-q track '{}' --unknown --init gt --update incremental --update-frames 5 "
+                         "--update-in-frame --out '{}' --save-model '{}'",
+                         *dir_, poses, saved));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("fused model:"), std::string::npos) << r.out;
+  EXPECT_GE(Success(*dir_, poses), 0.95);
+  // The saved model, its key views' images and the depth they saw, tracks as a given one.
+  EXPECT_TRUE(fs::exists(TempPath("fused/model_projectors.json")));
+  EXPECT_TRUE(fs::exists(TempPath("fused/model_projector_000_depth.png")));
+  const std::string again = TempPath("fused_again.csv");
+  const testing::CliResult tracked = RunCli(fmt::format(
+      "-q track '{}' --model '{}' --model-units mm --init gt --out '{}'", *dir_, saved, again));
+  ASSERT_EQ(tracked.exit_code, 0) << tracked.err;
+  EXPECT_GE(Success(*dir_, again), 0.95);
+}
+
 TEST_F(ModelCli, WhatCannotWorkFailsClearly) {
   struct Case {
     std::string args, message;

@@ -7,17 +7,28 @@
 
 #include "unseen/util/error.h"
 #include "unseen/util/logging.h"
+#include "unseen/util/timer.h"
 
 namespace unseen {
 
 std::string ToString(ModelUpdateMode mode) {
-  return mode == ModelUpdateMode::kNone ? "none" : "periodic";
+  switch (mode) {
+    case ModelUpdateMode::kNone:
+      return "none";
+    case ModelUpdateMode::kPeriodic:
+      return "periodic";
+    case ModelUpdateMode::kIncremental:
+      return "incremental";
+  }
+  return "?";
 }
 
 ModelUpdateMode ParseModelUpdateMode(const std::string& text) {
-  if (text == "none") return ModelUpdateMode::kNone;
-  if (text == "periodic") return ModelUpdateMode::kPeriodic;
-  ThrowError("model update '{}' is not one of none, periodic", text);
+  for (ModelUpdateMode mode :
+       {ModelUpdateMode::kNone, ModelUpdateMode::kPeriodic, ModelUpdateMode::kIncremental}) {
+    if (text == ToString(mode)) return mode;
+  }
+  ThrowError("model update '{}' is not one of none, periodic, incremental", text);
 }
 
 void ModelUpdateOptions::Check() const {
@@ -29,10 +40,40 @@ void ModelUpdateOptions::Check() const {
 ModelUpdater::ModelUpdater(const Modeller* modeller, const ModelUpdateOptions& options)
     : modeller_(*modeller), options_(options) {
   options_.Check();
+  if (options_.mode == ModelUpdateMode::kIncremental) {
+    fusion_ = std::make_unique<ModelFusion>(modeller_.rig().cameras[modeller_.reference()],
+                                            modeller_.options().segmentation.max_radius_m,
+                                            modeller_.options().fusion);
+  }
 }
 
 ModelUpdater::~ModelUpdater() {
   if (pending_.valid()) pending_.wait();  // the build reads the modeller
+}
+
+Mesh ModelUpdater::Start(const ModelBuild& first) {
+  UNSEEN_CHECK(first.ok(), "ModelUpdater: the first build failed: {}", first.why);
+  if (!fusion_) return *first.mesh;
+  std::string why;
+  std::optional<Mesh> fused = fusion_->Fuse(first, &why);
+  stats_.fusion = fusion_->report();
+  if (!fused) {
+    UNSEEN_LOG_DEBUG("model update: {}; tracking the first build's mesh", why);
+    return *first.mesh;
+  }
+  return std::move(*fused);
+}
+
+ModelBuild ModelUpdater::BuildAndFuse(const Frame& frame, const Rigid3d& world_from_obj,
+                                      const Mesh& current) {
+  ModelBuild build = modeller_.Build(frame, world_from_obj, PixelRect(), cv::Mat(), &current);
+  if (!build.ok() || !fusion_) return build;
+  Timer timer;
+  std::string why;
+  build.mesh = fusion_->Fuse(build, &why);
+  if (!build.mesh) build.why = why;
+  build.mesh_ms += timer.ElapsedMilliseconds();
+  return build;
 }
 
 std::optional<Mesh> ModelUpdater::Collect(ModelBuild build) {
@@ -43,6 +84,7 @@ std::optional<Mesh> ModelUpdater::Collect(ModelBuild build) {
     UNSEEN_LOG_DEBUG("model update: cannot model the frame: {}", build.why);
     return std::nullopt;
   }
+  if (fusion_) stats_.fusion = fusion_->report();
   ++stats_.built;
   if (build.alignment.ok) {
     ++stats_.aligned;
@@ -69,12 +111,12 @@ std::optional<Mesh> ModelUpdater::AfterFrame(const Frame& frame, const Rigid3d& 
   ++stats_.started;
   frames_since_model_ = 0;  // the next attempt after every_frames more, built or not
   if (!options_.asynchronous) {
-    return Collect(modeller_.Build(frame, world_from_obj, PixelRect(), cv::Mat(), &current));
+    return Collect(BuildAndFuse(frame, world_from_obj, current));
   }
   // The frame's images are shared, not copied: nothing writes to a frame once read. The
   // model in use is copied (the tracker may swap it meanwhile).
   pending_ = std::async(std::launch::async, [this, frame, world_from_obj, model = current] {
-    return modeller_.Build(frame, world_from_obj, PixelRect(), cv::Mat(), &model);
+    return BuildAndFuse(frame, world_from_obj, model);
   });
   return ready;
 }
@@ -82,7 +124,7 @@ std::optional<Mesh> ModelUpdater::AfterFrame(const Frame& frame, const Rigid3d& 
 bool ModelUpdater::AfterTracked(const Frame& frame, const TrackResult& result, Tracker* tracker) {
   if (result.status != TrackStatus::kTracking) return false;
   std::optional<Mesh> next =
-      AfterFrame(frame, result.world_from_obj, result.confidence, tracker->model());
+      AfterFrame(frame, result.world_from_obj, result.confidence, tracker->given_model());
   if (!next) return false;
   tracker->SetModel(std::move(*next));
   return true;

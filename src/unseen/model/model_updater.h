@@ -5,22 +5,26 @@
 // replacement: every `every_frames` frames, a confidently tracked frame is modelled anew
 // at the tracked pose (the object frame carried over, so the pose stream continues), on a
 // thread of its own beside the tracking; the new model is handed over at the next frame
-// boundary once it is built.
+// boundary once it is built. Beyond the thesis, incremental modelling (model_fusion.h):
+// each build's depth is fused into one model in the first build's object frame, which
+// grows with every side seen and does not drift with the tracked pose at each rebuild.
 #pragma once
 
 #include <future>
+#include <memory>
 #include <optional>
 #include <string>
 
 #include "unseen/mesh/mesh.h"
+#include "unseen/model/model_fusion.h"
 #include "unseen/model/modeller.h"
 #include "unseen/track/tracker.h"
 
 namespace unseen {
 
-enum class ModelUpdateMode { kNone, kPeriodic };
+enum class ModelUpdateMode { kNone, kPeriodic, kIncremental };
 
-// "none", "periodic"; Parse throws unseen::Error naming the value.
+// "none", "periodic", "incremental"; Parse throws unseen::Error naming the value.
 std::string ToString(ModelUpdateMode mode);
 ModelUpdateMode ParseModelUpdateMode(const std::string& text);
 
@@ -38,6 +42,7 @@ struct ModelUpdateStats {
   int aligned = 0;             // builds aligned to the model in use
   double correction_mm = 0.0;  // summed shift of the surface by those alignments
   std::string last_failure;
+  FusionReport fusion;  // kIncremental: the fused model's state after the last build
 };
 
 class ModelUpdater {
@@ -45,6 +50,11 @@ class ModelUpdater {
   // `modeller` must outlive this.
   ModelUpdater(const Modeller* modeller, const ModelUpdateOptions& options);
   ~ModelUpdater();
+
+  // The model to track from the first build (which must have succeeded): its mesh, or
+  // with kIncremental the fused model of its depth (the build's mesh when the fused volume
+  // holds no surface).
+  Mesh Start(const ModelBuild& first);
 
   // After each tracked frame, with the tracker's pose and confidence for it. Returns a
   // new model to swap in now (Tracker::SetModel) when a build has finished; starts a build
@@ -64,10 +74,14 @@ class ModelUpdater {
 
  private:
   std::optional<Mesh> Collect(ModelBuild build);
+  // Modeller::Build, then with kIncremental the fusion of its depth (on the build's thread:
+  // only one build runs at a time).
+  ModelBuild BuildAndFuse(const Frame& frame, const Rigid3d& world_from_obj, const Mesh& current);
 
   const Modeller& modeller_;
   ModelUpdateOptions options_;
   int frames_since_model_ = 0;
+  std::unique_ptr<ModelFusion> fusion_;  // kIncremental
   std::future<ModelBuild> pending_;
   ModelUpdateStats stats_;
 };

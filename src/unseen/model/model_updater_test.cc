@@ -78,6 +78,29 @@ TEST_F(ModelUpdates, BuildsBesideTheTrackingAndHandsOverLater) {
   EXPECT_EQ(updater.stats().started, 1);
 }
 
+TEST_F(ModelUpdates, IncrementalFusesEveryBuildIntoOneModel) {
+  update_.mode = ModelUpdateMode::kIncremental;
+  ModelUpdater updater(modeller_.get(), update_);
+  ModelBuild first = modeller_->Build(scene_.frame, scene_.world_from_obj, PixelRect());
+  const Mesh start = updater.Start(first);
+  EXPECT_EQ(updater.stats().fusion.fused, 1);
+  EXPECT_EQ(start.projectors.size(), 1u);
+  EXPECT_GT(start.num_triangles(), 100);
+  std::optional<Mesh> model;
+  for (int i = 0; i < 3 && !model; ++i) {
+    model = updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0, start);
+  }
+  ASSERT_TRUE(model.has_value());
+  EXPECT_EQ(updater.stats().fusion.fused, 2);
+  // The same view again: no new key view, but the latest view textures it too.
+  EXPECT_EQ(updater.stats().fusion.key_views, 1);
+  EXPECT_EQ(model->projectors.size(), 2u);
+  EXPECT_LE(model->num_triangles(), options_.fusion.max_triangles);
+  EXPECT_EQ(ParseModelUpdateMode("incremental"), ModelUpdateMode::kIncremental);
+  // A failed first build cannot start a model.
+  EXPECT_THROW(updater.Start(ModelBuild()), Error);
+}
+
 TEST_F(ModelUpdates, NoneNeverRebuildsAndBadOptionsAreErrors) {
   update_.mode = ModelUpdateMode::kNone;
   ModelUpdater updater(modeller_.get(), update_);

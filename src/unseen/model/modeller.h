@@ -17,6 +17,7 @@
 #include "unseen/io/sequence.h"
 #include "unseen/mesh/mesh.h"
 #include "unseen/model/depth_extraction.h"
+#include "unseen/model/fusion_options.h"
 #include "unseen/model/object_segmentation.h"
 #include "unseen/model/surface_alignment.h"
 #include "unseen/model/surface_mesh.h"
@@ -38,10 +39,12 @@ struct ModellerOptions {
   // mm: corrections of 5-7 mm, no gain).
   bool align_to_current = false;
   SurfaceAlignmentOptions alignment;
+  ModelFusionOptions fusion;  // incremental model updates (model_updater.h)
   void Check() const;
 };
 
-// The options from YAML (sections depth, plane_sweep, stereo, segmentation, mesh, model;
+// The options from YAML (sections depth, plane_sweep, stereo, segmentation, mesh, model,
+// alignment, fusion;
 // every key as the structs' fields), checked. Errors name the file (`what`), the section,
 // the key and the value.
 ModellerOptions ParseModellerOptions(const std::string& yaml_text, const std::string& what);
@@ -90,6 +93,7 @@ class Modeller {
 
   const ModellerOptions& options() const { return options_; }
   int reference() const { return reference_; }
+  const Rig& rig() const { return rig_; }
 
  private:
   Rig rig_;

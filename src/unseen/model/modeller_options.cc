@@ -2,7 +2,7 @@
 //
 // The modeller's options: every options struct's Check (kept apart from the code that uses
 // them, so that the YAML reader builds alone: fuzz/model_options_fuzzer.cc) and their
-// reading from YAML (sections depth, plane_sweep, stereo, segmentation, mesh, model,
+// reading from YAML (sections depth, plane_sweep, stereo, segmentation, mesh, model, fusion,
 // alignment).
 #include <cmath>
 #include <map>
@@ -125,11 +125,40 @@ void SurfaceAlignmentOptions::Check() const {
                max_correction_m, max_correction_deg);
 }
 
+void TsdfOptions::Check() const {
+  UNSEEN_CHECK(voxels_per_side >= 8 && voxels_per_side <= 512,
+               "fusion.voxels_per_side {} must be in [8, 512]", voxels_per_side);
+  UNSEEN_CHECK(min_voxel_m > 0.0 && std::isfinite(min_voxel_m), "fusion.min_voxel_m {} must be > 0",
+               min_voxel_m);
+  UNSEEN_CHECK(truncation_voxels >= 1.5 && truncation_voxels <= 50.0,
+               "fusion.truncation_voxels {} must be in [1.5, 50]", truncation_voxels);
+  UNSEEN_CHECK(max_weight >= 1.0f && std::isfinite(max_weight), "fusion.max_weight {} must be >= 1",
+               max_weight);
+  UNSEEN_CHECK(free_space_weight >= 0.0f && free_space_weight <= 1.0f,
+               "fusion.free_space_weight {} must be in [0, 1]", free_space_weight);
+  UNSEEN_CHECK(min_component_share >= 0.0 && min_component_share <= 1.0,
+               "fusion.min_component_share {} must be in [0, 1]", min_component_share);
+}
+
+void ModelFusionOptions::Check() const {
+  volume.Check();
+  UNSEEN_CHECK(extent_factor >= 1.0 && extent_factor <= 10.0,
+               "fusion.extent_factor {} must be in [1, 10]", extent_factor);
+  UNSEEN_CHECK(key_view_spacing_deg >= 0.0 && key_view_spacing_deg <= 180.0,
+               "fusion.key_view_spacing_deg {} must be in [0, 180]", key_view_spacing_deg);
+  UNSEEN_CHECK(max_key_views >= 1 && max_key_views <= 64,
+               "fusion.max_key_views {} must be in [1, 64]", max_key_views);
+  UNSEEN_CHECK(max_triangles >= 4, "fusion.max_triangles {} must be >= 4", max_triangles);
+  UNSEEN_CHECK(max_error_voxels >= 0.0 && max_error_voxels <= 10.0,
+               "fusion.max_error_voxels {} must be in [0, 10]", max_error_voxels);
+}
+
 void ModellerOptions::Check() const {
   depth.Check();
   segmentation.Check();
   mesh.Check();
   alignment.Check();
+  fusion.Check();
   UNSEEN_CHECK(origin_offset_m >= 0.0 && std::isfinite(origin_offset_m),
                "model.origin_offset_m {} must be >= 0", origin_offset_m);
 }
@@ -151,6 +180,7 @@ ModellerOptions FromYaml(const YAML::Node& root, const std::string& what, Modell
   SegmentationOptions& sg = o.segmentation;
   SurfaceMeshOptions& me = o.mesh;
   SurfaceAlignmentOptions& al = o.alignment;
+  ModelFusionOptions& fu = o.fusion;
   const std::map<std::string, YamlSection> sections = {
       {"depth",
        {{"source", YamlEnumField(&d.source, &ParseSource)},
@@ -206,6 +236,19 @@ ModellerOptions FromYaml(const YAML::Node& root, const std::string& what, Modell
         {"damping", YamlField(&al.damping)},
         {"max_correction_m", YamlField(&al.max_correction_m)},
         {"max_correction_deg", YamlField(&al.max_correction_deg)}}},
+      {"fusion",
+       {{"voxels_per_side", YamlField(&fu.volume.voxels_per_side)},
+        {"min_voxel_m", YamlField(&fu.volume.min_voxel_m)},
+        {"truncation_voxels", YamlField(&fu.volume.truncation_voxels)},
+        {"max_weight", YamlField(&fu.volume.max_weight)},
+        {"free_space_weight", YamlField(&fu.volume.free_space_weight)},
+        {"min_component_share", YamlField(&fu.volume.min_component_share)},
+        {"extent_factor", YamlField(&fu.extent_factor)},
+        {"key_view_spacing_deg", YamlField(&fu.key_view_spacing_deg)},
+        {"max_key_views", YamlField(&fu.max_key_views)},
+        {"latest_view", YamlField(&fu.latest_view)},
+        {"max_triangles", YamlField(&fu.max_triangles)},
+        {"max_error_voxels", YamlField(&fu.max_error_voxels)}}},
   };
   ApplyYamlSections(root, what, sections);
   try {

@@ -151,6 +151,8 @@ class Tracker {
   // The model as rendered: the given one or, with LiveAppearanceOptions, the given one with
   // projective textures from the last confidently tracked frame.
   const Mesh& model() const { return *model_; }
+  // The model as given (constructor, SetModel), without live textures.
+  const Mesh& given_model() const { return *given_model_; }
   const TrackerOptions& options() const { return options_; }
   const MotionPredictor& predictor() const { return *predictor_; }
   bool initialized() const { return initialized_; }

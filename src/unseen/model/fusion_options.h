@@ -1,0 +1,48 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// Options of incremental modelling: the object-frame volume (tsdf_volume.h) and the fused
+// model made from it (model_fusion.h). Checked in modeller_options.cc with the modeller's
+// other options; read from the `fusion` section of the modeller's YAML.
+#pragma once
+
+namespace unseen {
+
+struct TsdfOptions {
+  int voxels_per_side = 128;       // the grid's resolution along each axis
+  double min_voxel_m = 0.002;      // the voxel's edge is never smaller (small objects)
+  double truncation_voxels = 3.0;  // |signed distance| kept, in voxels (>= 1.5)
+  float max_weight = 32.0f;        // cap on a voxel's summed weight: later maps still count
+  // Pixels outside the object's mask whose depth lies behind a voxel say the voxel is free
+  // space (the object's silhouette carves the volume); their weight relative to a surface
+  // measurement. 0: only the object's pixels are fused.
+  float free_space_weight = 0.5f;
+  // Parts of the surface with fewer triangles than this share of the largest connected
+  // part are dropped (specks of depth noise).
+  double min_component_share = 0.05;
+  void Check() const;
+};
+
+struct ModelFusionOptions {
+  TsdfOptions volume;
+  // The volume's half edge: this times the first model's farthest vertex from the object
+  // frame's origin (capped by the modeller's segmentation radius), so the sides not yet
+  // seen fit in.
+  double extent_factor = 1.6;
+  // A build's image becomes a key view (projector) when the direction from the object to
+  // its camera is this far from every key view's; the first key view of a direction is
+  // kept (a later one would paint the texture where a drifted pose puts it).
+  double key_view_spacing_deg = 30.0;
+  int max_key_views = 8;
+  // The last build's image textures the model too, where it faces the surface best: what
+  // the camera sees now was lit as it is now (a key view's shading was baked in under
+  // another orientation towards the light; on a sphere the texture is the only cue to its
+  // turn, and old shading pulls it).
+  bool latest_view = true;
+  // The surface handed to the tracker is decimated (mesh/decimate.h) to this many
+  // triangles, moving it by at most max_error_voxels voxels.
+  int max_triangles = 2000;
+  double max_error_voxels = 0.5;
+  void Check() const;
+};
+
+}  // namespace unseen
