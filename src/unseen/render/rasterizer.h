@@ -20,11 +20,12 @@
 // pixel once. The lens distortion of `camera` is ignored (it is removed at input).
 //
 // Colour sources, first that applies (per pixel):
-//  1. projective textures (Mesh::projectors non-empty): among the projectors that see the
-//     point (in front, inside the image, surface facing the projector) the one facing it
-//     most squarely; bilinear, clamped to the image edge. Self-occlusion as seen from the
-//     projector is tested against its depth map when it has one (Projector::depth). A
-//     point no projector sees falls through to 2-4.
+//  1. projective textures (Mesh::projectors non-empty): of the projectors that see the
+//     point (in front, inside the image, surface facing the projector), the first in the
+//     order of how squarely they face the triangle's centre; bilinear, clamped to the
+//     image edge. Self-occlusion as seen from the projector is tested against its depth
+//     map when it has one (Projector::depth). A point no projector sees falls through to
+//     2-4.
 //  2. UV texture of the triangle's material (triangles without `triangle_materials` use
 //     material 0): uv OBJ style (v up, (0, 0) the bottom-left corner of the image),
 //     bilinear, *wrapping* (repeat) outside [0, 1) and across the border, from a mip-map

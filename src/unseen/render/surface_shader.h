@@ -7,12 +7,12 @@
 // samples of a triangle, texel fetches are four-float loads.
 #pragma once
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
-#include <vector>
-
-#include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <utility>
+#include <vector>
 #if defined(__SSE2__)
 #include <immintrin.h>
 #endif
@@ -132,7 +132,6 @@ class Shader {
       v.depth_tolerance_m = p.depth_tolerance_m;
       projectors_.push_back(v);
     }
-    projector_triangles_.resize(projectors_.size());
   }
 
   const TextureView* textures() const { return textures_.data(); }
@@ -199,32 +198,54 @@ class Shader {
     if (!projectors_.empty()) {
       fallback_kind_ = kind_;
       kind_ = Kind::kProjective;
-      // The point of barycentric (b1, b2) in each projector's frame is affine in them:
-      // q = q0 + b1 dq1 + b2 dq2, prepared once per triangle.
-      const Eigen::Vector3f p0 = mesh_.vertices[t[0]];
-      const Eigen::Vector3f dp1 = mesh_.vertices[t[1]] - p0;
-      const Eigen::Vector3f dp2 = mesh_.vertices[t[2]] - p0;
-      const Eigen::Vector3f face_normal = dp1.cross(dp2);
-      for (size_t k = 0; k < projectors_.size(); ++k) {
-        const ProjectorView& v = projectors_[k];
-        ProjectorTriangle& pt = projector_triangles_[k];
-        pt.q0 = v.rotation * p0 + v.translation;
-        pt.dq1 = v.rotation * dp1;
-        pt.dq2 = v.rotation * dp2;
-        pt.normal = v.rotation * face_normal;
-      }
+      PrepareProjectors(tri);
     } else {
       fallback_kind_ = kind_;
     }
   }
 
+  // The projectors the triangle's centre faces, best facing first, each with the triangle
+  // in its frame (the point of barycentric (b1, b2) is affine in them: q = q0 + b1 dq1 +
+  // b2 dq2). A pixel takes the first of them that sees it (in its image, not hidden), so
+  // most pixels test one projector (the choice is per triangle rather than per pixel).
+  // Cached per triangle: small triangles are entered by many runs of pixels.
+  void PrepareProjectors(int tri) {
+    if (prepared_.empty()) prepared_.assign(mesh_.triangles.size(), {-1, 0});
+    auto& [begin, count] = prepared_[tri];
+    if (begin < 0) {
+      const Eigen::Vector3i& t = mesh_.triangles[tri];
+      const Eigen::Vector3f p0 = mesh_.vertices[t[0]];
+      const Eigen::Vector3f dp1 = mesh_.vertices[t[1]] - p0;
+      const Eigen::Vector3f dp2 = mesh_.vertices[t[2]] - p0;
+      const Eigen::Vector3f face_normal = dp1.cross(dp2);
+      begin = static_cast<int>(candidates_.size());
+      for (size_t k = 0; k < projectors_.size(); ++k) {
+        const ProjectorView& v = projectors_[k];
+        ProjectorTriangle pt;
+        pt.projector = static_cast<int>(k);
+        pt.q0 = v.rotation * p0 + v.translation;
+        pt.dq1 = v.rotation * dp1;
+        pt.dq2 = v.rotation * dp2;
+        pt.normal = v.rotation * face_normal;
+        const Eigen::Vector3f centre = pt.q0 + (pt.dq1 + pt.dq2) / 3.0f;
+        const float facing = -pt.normal.dot(centre);
+        if (!(facing > 0.0f && centre.z() > 0.0f)) continue;
+        pt.score = facing / centre.norm();
+        candidates_.push_back(pt);
+      }
+      count = static_cast<int>(candidates_.size()) - begin;
+      std::sort(
+          candidates_.begin() + begin, candidates_.end(),
+          [](const ProjectorTriangle& a, const ProjectorTriangle& b) { return a.score > b.score; });
+    }
+    candidates_begin_ = begin;
+    candidates_end_ = begin + count;
+  }
+
   bool ProjectiveColor(float b1, float b2, float* bgr) const {
-    int best = -1;
-    float best_score = 0.0f, best_x = 0.0f, best_y = 0.0f;
-    const bool several = projectors_.size() > 1;
-    for (size_t k = 0; k < projectors_.size(); ++k) {
-      const ProjectorView& v = projectors_[k];
-      const ProjectorTriangle& pt = projector_triangles_[k];
+    for (int c = candidates_begin_; c < candidates_end_; ++c) {
+      const ProjectorTriangle& pt = candidates_[c];
+      const ProjectorView& v = projectors_[pt.projector];
       const Eigen::Vector3f q = pt.q0 + b1 * pt.dq1 + b2 * pt.dq2;
       if (!(q.z() > 0.0f)) continue;
       const float inv_z = 1.0f / q.z();
@@ -238,21 +259,12 @@ class Shader {
         const float seen = v.depth->ptr<float>(py)[px];
         if (!(seen > 0.0f) || q.z() > seen + v.depth_tolerance_m) continue;
       }
-      // Cosine (times |n|) between the normal and the direction to the projector: the
-      // surface must face it; a single projector needs no comparison.
-      const float facing = -pt.normal.dot(q);
-      if (!(facing > 0.0f)) continue;
-      const float score = several ? facing / q.norm() : 1.0f;
-      if (score > best_score) {
-        best = static_cast<int>(k);
-        best_score = score;
-        best_x = x;
-        best_y = y;
-      }
+      // The surface must face the projector here too.
+      if (!(-pt.normal.dot(q) > 0.0f)) continue;
+      SampleClamp(v.image, x, y, bgr);
+      return true;
     }
-    if (best < 0) return false;
-    SampleClamp(projectors_[best].image, best_x, best_y, bgr);
-    return true;
+    return false;
   }
 
   const Mesh& mesh_;
@@ -264,11 +276,16 @@ class Shader {
   const TextureView* texture_ = nullptr;
   Eigen::Vector2f uv0_ = Eigen::Vector2f::Zero(), duv1_ = uv0_, duv2_ = uv0_;
   Eigen::Vector3f c0_ = Eigen::Vector3f::Zero(), dc1_ = c0_, dc2_ = c0_;
-  // Per projector, the prepared triangle in its frame.
+  // A triangle in a projector's frame.
   struct ProjectorTriangle {
     Eigen::Vector3f q0, dq1, dq2, normal;
+    float score = 0.0f;  // how squarely the triangle's centre faces the projector
+    int projector = 0;
   };
-  std::vector<ProjectorTriangle> projector_triangles_;
+  // Per triangle (first, count) of its candidates_, first < 0 until prepared.
+  std::vector<std::pair<int, int>> prepared_;
+  std::vector<ProjectorTriangle> candidates_;
+  int candidates_begin_ = 0, candidates_end_ = 0;  // of the prepared triangle
   // The triangle prepared for Normal().
   int normal_tri_ = -1;
   Eigen::Vector3f n0_ = Eigen::Vector3f::Zero(), dn1_ = n0_, dn2_ = n0_;
