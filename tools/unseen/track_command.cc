@@ -53,7 +53,7 @@ struct TrackArgs {
   // current (SPEC 5).
   bool unknown = false;
   UnknownObjectArgs object;  // --roi, --mask, --depth, --model-config (init: --init)
-  std::string update = "periodic";
+  std::string update = "incremental";
   int update_frames = 30;
   bool update_in_frame = false;
   std::string save_model;
@@ -327,8 +327,9 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_option("--model-config", args->object.model_config,
                   "--unknown: modeller options (YAML)");
   cmd->add_option("--update", args->update,
-                  "--unknown: model update: periodic (rebuild every --update-frames), incremental "
-                  "(fuse every --update-frames into one growing model) or none");
+                  "--unknown: model update: incremental (fuse a build every --update-frames into "
+                  "one growing model; default), periodic (rebuild every --update-frames, the "
+                  "thesis's) or none");
   cmd->add_option("--update-frames", args->update_frames,
                   "--unknown: frames between model rebuilds");
   cmd->add_flag("--update-in-frame", args->update_in_frame,

@@ -16,6 +16,9 @@ struct TsdfOptions {
   // space (the object's silhouette carves the volume); their weight relative to a surface
   // measurement. 0: only the object's pixels are fused.
   float free_space_weight = 0.5f;
+  // Voxels this close to the support plane the segmentation found (or below it) are free
+  // space: the table the object stands on never joins the model.
+  double support_margin_m = 0.003;
   // Parts of the surface with fewer triangles than this share of the largest connected
   // part are dropped (specks of depth noise).
   double min_component_share = 0.05;

@@ -94,7 +94,17 @@ std::optional<Mesh> ModelFusion::Fuse(const ModelBuild& build, std::string* why)
   }
   cv::Mat depth, mask;
   SurfaceDepth(build, reference_.intrinsics, cam_from_obj, &depth, &mask);
-  report_.last = volume_->Integrate(depth, mask, reference_.intrinsics, cam_from_obj);
+  // The support plane in the object frame: n.(R p + t) + d = (R^T n).p + (n.t + d).
+  std::optional<Eigen::Vector4f> support;
+  if (build.segmentation.plane_found) {
+    const Eigen::Vector3d n = build.segmentation.support_plane.head<3>();
+    const Eigen::Vector3d n_obj = cam_from_obj.RotationMatrix().transpose() * n;
+    support =
+        Eigen::Vector4f(n_obj.x(), n_obj.y(), n_obj.z(),
+                        n.dot(cam_from_obj.translation()) + build.segmentation.support_plane[3]);
+  }
+  report_.last = volume_->Integrate(depth, mask, reference_.intrinsics, cam_from_obj,
+                                    support ? &*support : nullptr);
   ++report_.fused;
 
   // A key view for a direction not yet textured.

@@ -25,6 +25,7 @@ class ModelUpdates : public ::testing::Test {
     const ModelBuild first = modeller_->Build(scene_.frame, scene_.world_from_obj, PixelRect());
     ASSERT_TRUE(first.ok()) << first.why;
     model_ = *first.mesh;
+    update_.mode = ModelUpdateMode::kPeriodic;  // the thesis's (incremental: its own test)
     update_.every_frames = 3;
     update_.asynchronous = false;
   }

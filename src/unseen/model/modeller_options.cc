@@ -136,6 +136,8 @@ void TsdfOptions::Check() const {
                max_weight);
   UNSEEN_CHECK(free_space_weight >= 0.0f && free_space_weight <= 1.0f,
                "fusion.free_space_weight {} must be in [0, 1]", free_space_weight);
+  UNSEEN_CHECK(support_margin_m >= 0.0 && std::isfinite(support_margin_m),
+               "fusion.support_margin_m {} must be >= 0", support_margin_m);
   UNSEEN_CHECK(min_component_share >= 0.0 && min_component_share <= 1.0,
                "fusion.min_component_share {} must be in [0, 1]", min_component_share);
 }
@@ -242,6 +244,7 @@ ModellerOptions FromYaml(const YAML::Node& root, const std::string& what, Modell
         {"truncation_voxels", YamlField(&fu.volume.truncation_voxels)},
         {"max_weight", YamlField(&fu.volume.max_weight)},
         {"free_space_weight", YamlField(&fu.volume.free_space_weight)},
+        {"support_margin_m", YamlField(&fu.volume.support_margin_m)},
         {"min_component_share", YamlField(&fu.volume.min_component_share)},
         {"extent_factor", YamlField(&fu.extent_factor)},
         {"key_view_spacing_deg", YamlField(&fu.key_view_spacing_deg)},

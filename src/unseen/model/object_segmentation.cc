@@ -181,6 +181,10 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
     support =
         SupportPlane(near, near_pixels, size, origin_in_cam, 0.7 * options.max_radius_m, options);
     rep.plane_found = support.has_value();
+    if (support) {
+      const double side = support->normal.dot(origin_in_cam) + support->offset >= 0.0 ? 1.0 : -1.0;
+      rep.support_plane << side * support->normal, side * support->offset;
+    }
   }
   // Where the depth is dense, the pixels without depth are not the object's either.
   if (rep.dense) {

@@ -41,6 +41,9 @@ struct SegmentationOptions {
 struct SegmentationReport {
   int region_pixels = 0, with_depth = 0, on_plane = 0, beyond_radius = 0, unconnected = 0;
   bool plane_found = false, dense = false;
+  // When plane_found: the support plane in the camera frame, (n, d) with n.p + d = 0, |n|
+  // = 1, the object frame's origin on the positive side.
+  Eigen::Vector4d support_plane = Eigen::Vector4d::Zero();
 };
 
 // CV_8UC1 of the camera's size, 255 on the object's pixels. `origin_in_cam`: the object

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "unseen/util/error.h"
@@ -90,7 +91,8 @@ cv::Mat ViewCosines(const cv::Mat& depth, const PinholeCamera& camera, float min
 }  // namespace
 
 TsdfIntegration TsdfVolume::Integrate(const cv::Mat& depth, const cv::Mat& object_mask,
-                                      const PinholeCamera& camera, const Rigid3d& cam_from_obj) {
+                                      const PinholeCamera& camera, const Rigid3d& cam_from_obj,
+                                      const Eigen::Vector4f* support_plane) {
   UNSEEN_CHECK(
       depth.type() == CV_32FC1 && depth.cols == camera.width && depth.rows == camera.height,
       "TsdfVolume: depth must be CV_32FC1 of the camera's {}x{} pixels (got {}x{} type {})",
@@ -116,6 +118,14 @@ TsdfIntegration TsdfVolume::Integrate(const cv::Mat& depth, const cv::Mat& objec
           rotation * (origin_ + voxel_ * Eigen::Vector3f(0.0f, float(y), float(z))) + translation;
       float* tsdf = &tsdf_[Index(0, y, z)];
       float* weight = &weight_[Index(0, y, z)];
+      // Height above the support plane along the row: h(x) = h0 + x dh.
+      const Eigen::Vector3f row_origin =
+          origin_ + voxel_ * Eigen::Vector3f(0.0f, float(y), float(z));
+      const float h0 = support_plane
+                           ? support_plane->head<3>().dot(row_origin) + (*support_plane)[3]
+                           : std::numeric_limits<float>::infinity();
+      const float dh = support_plane ? (*support_plane)[0] * voxel_ : 0.0f;
+      const float margin = static_cast<float>(options_.support_margin_m);
       for (int x = 0; x < n_; ++x) {
         const Eigen::Vector3f p = start + float(x) * step_x;
         if (p.z() <= 1e-3f) continue;
@@ -123,6 +133,13 @@ TsdfIntegration TsdfVolume::Integrate(const cv::Mat& depth, const cv::Mat& objec
         const int u = static_cast<int>(std::floor(fx * p.x() * inv_z + cx + 0.5f));
         const int v = static_cast<int>(std::floor(fy * p.y() * inv_z + cy + 0.5f));
         if (u < 0 || v < 0 || u >= camera.width || v >= camera.height) continue;
+        if (h0 + float(x) * dh < margin) {  // on or below the support: not the object
+          const float total = weight[x] + 1.0f;
+          tsdf[x] = (tsdf[x] * weight[x] + 1.0f) / total;
+          weight[x] = std::min(total, options_.max_weight);
+          ++report.updated_voxels;
+          continue;
+        }
         const float d = depth.at<float>(v, u);
         if (!(d > 0.0f)) continue;
         // Signed distance from the measured surface: + in front of it (free).

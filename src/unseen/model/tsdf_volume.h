@@ -40,10 +40,13 @@ class TsdfVolume {
 
   // Folds in one depth map (CV_32FC1, metres along the optical axis, 0 = none) seen by
   // `camera` at `cam_from_obj`. `object_mask` (CV_8UC1 of the map's size, non-zero on the
-  // object): its pixels measure the surface; the others only carve free space. Throws
-  // unseen::Error for a map or mask of the wrong type or size.
+  // object): its pixels measure the surface; the others only carve free space.
+  // `support_plane` (optional, object frame, (n, d) with n.p + d = 0 and the object on the
+  // positive side): the voxels in view within support_margin_m of it or below are free.
+  // Throws unseen::Error for a map or mask of the wrong type or size.
   TsdfIntegration Integrate(const cv::Mat& depth, const cv::Mat& object_mask,
-                            const PinholeCamera& camera, const Rigid3d& cam_from_obj);
+                            const PinholeCamera& camera, const Rigid3d& cam_from_obj,
+                            const Eigen::Vector4f* support_plane = nullptr);
 
   // The zero level as a mesh in the object frame, counter-clockwise seen from outside
   // (the free side), with vertex normals; no triangles when nothing was seen yet.
