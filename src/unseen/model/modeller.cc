@@ -59,6 +59,23 @@ ModelBuild Modeller::Build(const Frame& frame, const Rigid3d& world_from_obj,
     out.why = "the object's region is smaller than 8x8 pixels in the reference image";
     return out;
   }
+  // An image-based source needs a second view of the object.
+  if (options_.depth.source != DepthSourceKind::kSensor) {
+    bool seen_twice = false;
+    for (int c = 0; c < rig_.size() && !seen_twice; ++c) {
+      if (c == reference_) continue;
+      const RigCamera& other = rig_.cameras[c];
+      const Eigen::Vector3d in_other = other.cam_from_world() * (world_from_obj.translation());
+      seen_twice = other.intrinsics.SphereRect(in_other, radius).has_value();
+    }
+    if (!seen_twice) {
+      out.why = fmt::format(
+          "no camera but the reference sees the object (the rig's views do not overlap "
+          "there); depth source {} needs two views of it",
+          ToString(options_.depth.source));
+      return out;
+    }
+  }
   Timer timer;
   const double near = std::max(options_.depth.min_depth_m, origin.z() - radius);
   const double far = std::min(options_.depth.max_depth_m, origin.z() + radius);

@@ -215,6 +215,16 @@ TEST_F(ModellerScene, WhatCannotBeModelledIsAStatusNotAnEmptyModel) {
   b = modeller.Build(blank, s.world_from_obj, ObjectRegion(10));
   EXPECT_FALSE(b.ok());
   EXPECT_NE(b.why.find("depth"), std::string::npos) << b.why;
+  // Cameras that do not see what the reference sees: no second view to match.
+  Rig apart = s.rig;
+  for (int c = 1; c < apart.size(); ++c) {
+    apart.cameras[c].world_from_cam =
+        Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY())),
+                Eigen::Vector3d(0.1 * c, 0, 0));
+  }
+  b = Modeller(apart, 0, options).Build(s.frame, s.world_from_obj, ObjectRegion(10));
+  EXPECT_FALSE(b.ok());
+  EXPECT_NE(b.why.find("do not overlap"), std::string::npos) << b.why;
   // A mask of the wrong size is an error.
   EXPECT_THROW(
       modeller.Build(s.frame, s.world_from_obj, ObjectRegion(10), cv::Mat::ones(5, 5, CV_8U)),
