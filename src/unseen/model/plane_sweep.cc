@@ -85,13 +85,19 @@ DepthMap PlaneSweepDepth::Extract(const Frame& frame, const PixelRect& roi, doub
   const Eigen::Matrix3d kref_inv = kref.K().inverse();
   const cv::Matx33d shift(1, 0, w.x0, 0, 1, w.y0, 0, 0, 1);  // region pixel -> image pixel
 
-  // The cost volume over the region (rows of the grown region, cropped below).
+  // The cost volume over the region (rows of the grown region, cropped below): filled a
+  // plane at a time (row k of by_plane), then transposed so that each pixel's costs are
+  // contiguous for the per-pixel passes below (volume[i * planes + k]).
   const int n = w.width() * w.height();
-  std::vector<float> volume(static_cast<size_t>(planes) * n);
+  const int width = w.width();
+  cv::Mat by_plane(planes, n, CV_32FC1);
   std::vector<cv::Mat> camera_costs(others.size());
-  cv::Mat warped, valid, ones_mask;
+  const bool all_cameras = num_best == num_others;
+  std::vector<float> sum(all_cameras ? n : 0);
+  cv::Mat warped, stacked(wrect.size(), CV_32FC4), boxed;
   for (int k = 0; k < planes; ++k) {
     const double z = 1.0 / (inv_far + k * inv_step);
+    if (all_cameras) std::fill(sum.begin(), sum.end(), 0.0f);
     for (size_t j = 0; j < others.size(); ++j) {
       const RigCamera& cam = rig_.cameras[others[j]];
       const Rigid3d other_from_ref = cam.cam_from_world() * ref.world_from_cam;
@@ -101,93 +107,110 @@ DepthMap PlaneSweepDepth::Extract(const Frame& frame, const PixelRect& roi, doub
       const cv::Matx33d homography = ToCv(cam.intrinsics.K() * h * kref_inv) * shift;
       cv::warpPerspective(greys[j], warped, homography, wrect.size(),
                           cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT, -1.0);
-      // Where the other camera does not see the plane (warped from outside its image).
-      cv::threshold(warped, valid, -0.5, 1.0, cv::THRESH_BINARY);
-      const cv::Mat mean_w = Box(warped, o.window_px);
-      const cv::Mat var_w = Box(warped.mul(warped), o.window_px) - mean_w.mul(mean_w);
-      const cv::Mat cross = Box(ref_w.mul(warped), o.window_px) - mean_r.mul(mean_w);
-      const cv::Mat coverage = Box(valid, o.window_px);
-      cv::Mat& cost = camera_costs[j];
-      cost.create(wrect.size(), CV_32FC1);
+      // One box filter over (warped, warped^2, reference x warped, seen): the window
+      // means that make the ZNCC, and the share of the window the other camera sees
+      // (warped from outside its image: -1).
       for (int y = 0; y < w.height(); ++y) {
+        const float* wp = warped.ptr<float>(y);
+        const float* rp = ref_w.ptr<float>(y);
+        cv::Vec4f* st = stacked.ptr<cv::Vec4f>(y);
+        for (int x = 0; x < width; ++x) {
+          const bool seen = wp[x] > -0.5f;
+          const float v = seen ? wp[x] : 0.0f;
+          st[x] = cv::Vec4f(v, v * v, rp[x] * v, seen ? 1.0f : 0.0f);
+        }
+      }
+      cv::boxFilter(stacked, boxed, CV_32F, cv::Size(o.window_px, o.window_px), cv::Point(-1, -1),
+                    true, cv::BORDER_REPLICATE);
+      cv::Mat& cost = camera_costs[j];
+      if (!all_cameras) cost.create(wrect.size(), CV_32FC1);
+      for (int y = 0; y < w.height(); ++y) {
+        const float* mr = mean_r.ptr<float>(y);
         const float* vr = var_r.ptr<float>(y);
-        const float* vw = var_w.ptr<float>(y);
-        const float* cr = cross.ptr<float>(y);
-        const float* cov = coverage.ptr<float>(y);
-        float* co = cost.ptr<float>(y);
-        for (int x = 0; x < w.width(); ++x) {
-          const float denom = std::sqrt(std::max(vr[x] * vw[x], 1e-12f));
-          const float ncc = std::clamp(cr[x] / denom, -1.0f, 1.0f);
-          co[x] = cov[x] > 0.999f ? 1.0f - ncc : 2.0f;
+        const cv::Vec4f* bx = boxed.ptr<cv::Vec4f>(y);
+        float* co = all_cameras ? &sum[static_cast<size_t>(y) * width] : cost.ptr<float>(y);
+        for (int x = 0; x < width; ++x) {
+          const float mean_w = bx[x][0];
+          const float var_w = bx[x][1] - mean_w * mean_w;
+          const float cross = bx[x][2] - mr[x] * mean_w;
+          const float denom = std::sqrt(std::max(vr[x] * var_w, 1e-12f));
+          const float ncc = std::clamp(cross / denom, -1.0f, 1.0f);
+          const float c = bx[x][3] > 0.999f ? 1.0f - ncc : 2.0f;
+          if (all_cameras) {
+            co[x] += c;
+          } else {
+            co[x] = c;
+          }
         }
       }
     }
     // The mean of the best cameras' costs.
-    float* vk = volume.data() + static_cast<size_t>(k) * n;
+    if (all_cameras) {
+      const float scale = 1.0f / num_best;
+      float* row = by_plane.ptr<float>(k);
+      for (int i = 0; i < n; ++i) row[i] = sum[i] * scale;
+      continue;
+    }
     std::vector<float> per_camera(others.size());
     for (int y = 0; y < w.height(); ++y) {
-      for (int x = 0; x < w.width(); ++x) {
+      for (int x = 0; x < width; ++x) {
         for (size_t j = 0; j < others.size(); ++j) per_camera[j] = camera_costs[j].at<float>(y, x);
-        if (num_best < static_cast<int>(per_camera.size())) {
-          std::nth_element(per_camera.begin(), per_camera.begin() + (num_best - 1),
-                           per_camera.end());
-        }
-        float sum = 0.0f;
-        if (num_best == static_cast<int>(per_camera.size())) {
-          for (float c : per_camera) sum += c;
-        } else {
-          // nth_element leaves the num_best smallest in front (unordered).
-          for (int b = 0; b < num_best; ++b) sum += per_camera[b];
-        }
-        vk[y * w.width() + x] = sum / num_best;
+        // nth_element leaves the num_best smallest in front (unordered).
+        std::nth_element(per_camera.begin(), per_camera.begin() + (num_best - 1), per_camera.end());
+        float best_sum = 0.0f;
+        for (int b = 0; b < num_best; ++b) best_sum += per_camera[b];
+        by_plane.at<float>(k, y * width + x) = best_sum / num_best;
       }
     }
   }
+
+  cv::Mat by_pixel;
+  cv::transpose(by_plane, by_pixel);
+  const float* volume = by_pixel.ptr<float>();
 
   // Winner takes all, then the smoothness passes: the plane minimising its cost plus
   // smoothness times its distance (in planes) from the median of the 3x3 neighbours'.
   cv::Mat label(wrect.size(), CV_32FC1);
   for (int i = 0; i < n; ++i) {
-    int best = 0;
-    for (int k = 1; k < planes; ++k) {
-      if (volume[static_cast<size_t>(k) * n + i] < volume[static_cast<size_t>(best) * n + i])
-        best = k;
-    }
-    label.at<float>(i / w.width(), i % w.width()) = static_cast<float>(best);
+    const float* costs = &volume[static_cast<size_t>(i) * planes];
+    label.at<float>(i / width, i % width) =
+        static_cast<float>(std::min_element(costs, costs + planes) - costs);
   }
   const float lambda = static_cast<float>(o.smoothness);
   for (int pass = 0; pass < o.refine_iterations && lambda > 0.0f; ++pass) {
     cv::Mat median;
     cv::medianBlur(label, median, 3);
     for (int i = 0; i < n; ++i) {
-      const float m = median.at<float>(i / w.width(), i % w.width());
+      const float m = median.at<float>(i / width, i % width);
+      const float* costs = &volume[static_cast<size_t>(i) * planes];
       int best = 0;
       float best_cost = std::numeric_limits<float>::infinity();
       for (int k = 0; k < planes; ++k) {
-        const float c = volume[static_cast<size_t>(k) * n + i] + lambda * std::abs(k - m);
+        const float c = costs[k] + lambda * std::abs(k - m);
         if (c < best_cost) {
           best_cost = c;
           best = k;
         }
       }
-      label.at<float>(i / w.width(), i % w.width()) = static_cast<float>(best);
+      label.at<float>(i / width, i % width) = static_cast<float>(best);
     }
   }
 
   // Depth where the winner is distinct, good and inside the range, to a fraction of a plane.
   ForEachTexturedPixel(&out, r, options_.min_texturedness, [&](int x, int y, float* depth) {
-    const int i = (y - w.y0) * w.width() + (x - w.x0);
+    const int i = (y - w.y0) * width + (x - w.x0);
+    const float* costs = &volume[static_cast<size_t>(i) * planes];
     const int k = static_cast<int>(label.at<float>(y - w.y0, x - w.x0));
     if (k <= 0 || k >= planes - 1) return;  // at the range's ends: likely beyond it
-    const float c = volume[static_cast<size_t>(k) * n + i];
+    const float c = costs[k];
     if (c > o.max_cost) return;
     float second = std::numeric_limits<float>::infinity();
     for (int q = 0; q < planes; ++q) {
-      if (std::abs(q - k) > 1) second = std::min(second, volume[static_cast<size_t>(q) * n + i]);
+      if (std::abs(q - k) > 1) second = std::min(second, costs[q]);
     }
     if (second - c < o.uniqueness) return;
-    const float cm = volume[static_cast<size_t>(k - 1) * n + i];
-    const float cp = volume[static_cast<size_t>(k + 1) * n + i];
+    const float cm = costs[k - 1];
+    const float cp = costs[k + 1];
     const float curvature = cm - 2.0f * c + cp;
     const float offset =
         curvature > 1e-6f ? std::clamp(0.5f * (cm - cp) / curvature, -0.5f, 0.5f) : 0.0f;
