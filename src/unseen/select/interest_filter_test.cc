@@ -1,0 +1,136 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/select/interest_filter.h"
+
+#include <gtest/gtest.h>
+
+#include <opencv2/core.hpp>
+
+#include "unseen/select/interest_filter_bank.h"
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+FilterFrame Frame(const cv::Mat& image) {
+  FilterFrame f;
+  f.image = image;
+  f.camera = PinholeCamera::Centered(image.cols, image.rows, 200.0);
+  return f;
+}
+
+cv::Mat Ones(const cv::Size& size) { return cv::Mat(size, CV_32FC1, cv::Scalar(1.0f)); }
+
+// A textured background (fixed noise) with a 20x20 square of its own noise at `x`.
+cv::Mat SceneWithSquareAt(int x) {
+  cv::Mat image(96, 128, CV_32FC3);
+  cv::RNG background(1);
+  background.fill(image, cv::RNG::UNIFORM, 0.2, 0.5);
+  cv::Mat square(20, 20, CV_32FC3);
+  cv::RNG object(2);
+  object.fill(square, cv::RNG::UNIFORM, 0.6, 1.0);
+  square.copyTo(image(cv::Rect(x, 40, 20, 20)));
+  return image;
+}
+
+TEST(ColourFilter, InterestNearTheReferenceColourOnly) {
+  cv::Mat image(10, 20, CV_32FC3, cv::Scalar(0.1, 0.1, 0.9));       // red (BGR)
+  image(cv::Rect(10, 0, 10, 10)).setTo(cv::Scalar(0.9, 0.1, 0.1));  // blue half
+  ColourFilterOptions o;
+  o.colours_bgr = {Eigen::Vector3f(0.1f, 0.15f, 0.85f)};
+  o.radii = {0.3f};
+  ColourFilter filter(o);
+  cv::Mat interest = Ones(image.size());
+  interest.at<float>(5, 2) = 0.0f;  // already of no interest: stays so (2.4)
+  filter.Apply(Frame(image), &interest);
+  EXPECT_NEAR(interest.at<float>(0, 0), 1.0f - 0.0050f / 0.09f, 1e-4);
+  EXPECT_EQ(interest.at<float>(5, 2), 0.0f);
+  EXPECT_EQ(interest.at<float>(0, 15), 0.0f);
+  o.radii.clear();
+  EXPECT_THROW(ColourFilter{o}, Error);
+}
+
+TEST(MotionFilter, MovingPixelsAfterTheBackgroundIsLearnt) {
+  MotionFilter filter{MotionFilterOptions()};  // learns 8 frames
+  cv::Mat interest;
+  for (int i = 0; i < 8; ++i) {
+    interest = Ones(cv::Size(128, 96));
+    filter.Apply(Frame(SceneWithSquareAt(10)), &interest);
+    EXPECT_EQ(cv::countNonZero(interest), 0) << "frame " << i;  // learning
+  }
+  EXPECT_TRUE(filter.ready());
+  interest = Ones(cv::Size(128, 96));
+  filter.Apply(Frame(SceneWithSquareAt(80)), &interest);
+  // The square where it is now, and where it left the background bare, moved; the rest not.
+  EXPECT_GT(cv::mean(interest(cv::Rect(83, 43, 14, 14)))[0], 0.9);
+  EXPECT_EQ(cv::countNonZero(interest(cv::Rect(40, 0, 30, 96))), 0);
+  EXPECT_EQ(cv::countNonZero(interest(cv::Rect(0, 0, 128, 30))), 0);
+  // A frame of another size is an error.
+  cv::Mat small = Ones(cv::Size(64, 48));
+  EXPECT_THROW(filter.Apply(Frame(cv::Mat(48, 64, CV_32FC3, cv::Scalar(0.5, 0.5, 0.5))), &small),
+               Error);
+}
+
+TEST(PositionFilter, PixelsWhosePointIsInTheBox) {
+  FilterFrame frame = Frame(cv::Mat(40, 40, CV_32FC3, cv::Scalar(0.5, 0.5, 0.5)));
+  frame.depth = cv::Mat(40, 40, CV_32FC1, cv::Scalar(2.0f));  // background at 2 m
+  frame.depth(cv::Rect(10, 10, 10, 10)).setTo(0.8f);          // an object at 0.8 m
+  frame.depth.at<float>(0, 0) = 0.0f;                         // no measurement
+  PositionFilterOptions o;
+  o.min_m = Eigen::Vector3d(-0.5, -0.5, 0.5);
+  o.max_m = Eigen::Vector3d(0.5, 0.5, 1.0);
+  PositionFilter filter(o);
+  cv::Mat interest = Ones(frame.image.size());
+  filter.Apply(frame, &interest);
+  EXPECT_EQ(cv::countNonZero(interest), 100);
+  EXPECT_EQ(cv::countNonZero(interest(cv::Rect(10, 10, 10, 10))), 100);
+  frame.depth.release();
+  EXPECT_THROW(filter.Apply(frame, &interest), Error);
+  o.max_m.z() = 0.4;  // empty box
+  EXPECT_THROW(PositionFilter{o}, Error);
+}
+
+TEST(InterestFilterBank, ChainedFromItsFileAndErrorsNameTheFilter) {
+  InterestFilterBank bank = ParseInterestFilterBank(R"(
+filters:
+  - type: motion
+    warmup_frames: 10
+  - type: colour
+    colours_rgb: [[0.8, 0.8, 0.8]]
+    radii: [0.5]
+)",
+                                                    "bank.yaml");
+  ASSERT_EQ(bank.size(), 2);
+  EXPECT_EQ(bank.filter(0).name(), "motion");
+  EXPECT_EQ(bank.filter(1).name(), "colour");
+  for (int i = 0; i < 10; ++i) bank.Apply(Frame(SceneWithSquareAt(10)));
+  EXPECT_TRUE(bank.ready());
+  const cv::Mat interest = bank.Apply(Frame(SceneWithSquareAt(80)));
+  // Moving and bright: the square; the bare background it left moved but is dark.
+  EXPECT_GT(cv::mean(interest(cv::Rect(83, 43, 14, 14)))[0], 0.5);
+  EXPECT_LT(cv::mean(interest(cv::Rect(13, 43, 14, 14)))[0], 0.1);
+
+  struct Case {
+    std::string text, message;
+  };
+  for (const Case& c : {
+           Case{"filters:\n  - type: magic\n", "filters[0].type: 'magic'"},
+           Case{"filters:\n  - type: motion\n    histroy: 5\n", "filters[0]"},
+           Case{"filters:\n  - type: motion\n  - type: colour\n    colours_rgb: [[1, 0, 0]]\n",
+                "filters[1]"},
+           Case{"filters:\n  - type: position\n    min_m: [0, 0]\n    max_m: [1, 1, 1]\n",
+                "[x, y, z]"},
+           Case{"filter: []\n", "'filters' list"},
+           Case{"filters: [\n", "malformed"},
+       }) {
+    try {
+      ParseInterestFilterBank(c.text, "bank.yaml");
+      ADD_FAILURE() << "no error for:\n" << c.text;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("bank.yaml"), std::string::npos) << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace unseen
