@@ -54,6 +54,10 @@ void Mesh::Check(const std::string& what) const {
                "{}: {} normals for {} vertices", what, normals.size(), vertices.size());
   UNSEEN_CHECK(uvs.empty() || uvs.size() == vertices.size(), "{}: {} uvs for {} vertices",
                what, uvs.size(), vertices.size());
+  for (size_t i = 0; i < uvs.size(); ++i) {
+    UNSEEN_CHECK(uvs[i].allFinite(), "{}: texture coordinate {} is not finite ({} {})", what, i,
+                 uvs[i].x(), uvs[i].y());
+  }
   UNSEEN_CHECK(colors_bgr.empty() || colors_bgr.size() == vertices.size(),
                "{}: {} colours for {} vertices", what, colors_bgr.size(), vertices.size());
   UNSEEN_CHECK(triangle_materials.empty() || triangle_materials.size() == triangles.size(),

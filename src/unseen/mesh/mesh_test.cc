@@ -52,6 +52,11 @@ TEST(MeshCheck, RejectsEachKindOfBrokenMesh) {
   infinite_vertex.vertices[3].z() = std::numeric_limits<float>::infinity();
   ExpectCheckFails(infinite_vertex, "vertex 3");
 
+  Mesh nan_uv = Tetrahedron();
+  nan_uv.uvs.assign(4, Eigen::Vector2f(0.5f, 0.5f));
+  nan_uv.uvs[1].y() = std::numeric_limits<float>::quiet_NaN();
+  ExpectCheckFails(nan_uv, "texture coordinate 1");
+
   Mesh index_high = Tetrahedron();
   index_high.triangles[1][2] = 4;
   ExpectCheckFails(index_high, "index 4 out of range");
