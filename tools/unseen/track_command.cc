@@ -1,8 +1,9 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 //
-// `unseen track SEQ --init gt|POSE`: tracks the sequence's object (or --model) through every
-// frame with the 6-DoF tracker, writes the pose stream, a statistics JSON and optionally an
-// overlay video, and prints a summary (fps, lost frames, error against ground truth).
+// `unseen track SEQ --init gt|auto|POSE`: tracks the sequence's object (or --model) through
+// every frame with the 6-DoF tracker (from the true pose, from the pose found in the object's
+// box or selected region, or from the pose given), writes the pose stream, a statistics JSON and
+// optionally an overlay video, and prints a summary (fps, lost frames, error against ground truth).
 #include <unistd.h>
 
 #include <algorithm>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "tools/unseen/commands.h"
+#include "tools/unseen/known_object.h"
 #include "tools/unseen/unknown_object.h"
 #include "unseen/eval/overlay.h"
 #include "unseen/io/pose_stream.h"
@@ -41,6 +43,7 @@ struct TrackArgs {
   std::string model_units = "mm";
   double model_scale = 1.0;
   std::string init;
+  std::string filters;  // --init auto: interest filter bank (YAML)
   std::string config;
   std::string cameras;
   std::string out;
@@ -162,7 +165,12 @@ void RunTrack(const TrackArgs& args) {
 
   Rigid3d initial;
   UNSEEN_CHECK(unknown_start || !args.init.empty(),
-               "track: --init is required (gt, or tx,ty,tz,qx,qy,qz,qw)");
+               "track: --init is required (gt, auto, or tx,ty,tz,qx,qy,qz,qw)");
+  const bool auto_init = !unknown_start && args.init == "auto";
+  UNSEEN_CHECK(args.filters.empty() || (auto_init && args.object.roi.empty()),
+               "track: --filters serves --init auto without --roi only");
+  UNSEEN_CHECK(args.object.roi.empty() || args.unknown || auto_init,
+               "track: --roi serves --unknown or --init auto only");
   if (unknown_start) {
     initial = *unknown_start;
   } else if (args.init == "gt") {
@@ -170,7 +178,7 @@ void RunTrack(const TrackArgs& args) {
     UNSEEN_CHECK(gt.has_value(), "track: --init gt but sequence '{}' has no ground truth for "
                  "its first frame", args.sequence);
     initial = *gt;
-  } else {
+  } else if (!auto_init) {
     initial = ParsePose(args.init);
   }
 
@@ -178,11 +186,21 @@ void RunTrack(const TrackArgs& args) {
   // The predictor's time step is the sequence's frame interval.
   if (sequence.fps() > 0) tracker_options.frame_interval_s = 1.0 / sequence.fps();
   Tracker tracker(sequence.rig(), std::move(model), tracker_options);
-  tracker.Initialize(initial);
+  // --init auto: the first frame is the one where the model was found (its result is the
+  // search's; the tracker starts at that pose with the next frame).
+  std::optional<KnownObjectStart> found;
+  int start_index = args.first_frame;
+  if (auto_init) {
+    found = FindKnownObject(sequence, args.first_frame, args.object.roi, args.filters, &tracker,
+                            "track");
+    start_index = found->index;
+  } else {
+    tracker.Initialize(initial);
+  }
 
   std::unique_ptr<PoseStreamWriter> writer;
   if (!args.out.empty()) writer = std::make_unique<PoseStreamWriter>(args.out);
-  const int available = sequence.num_frames() - args.first_frame;
+  const int available = sequence.num_frames() - start_index;
   const int frames = args.max_frames > 0 ? std::min(args.max_frames, available) : available;
   std::vector<PoseRecord> records;
   StageTimes sum_times;
@@ -196,8 +214,8 @@ void RunTrack(const TrackArgs& args) {
   // a damaged file) is a warning: its camera sits the frame out, and a frame without any
   // image is reported lost with the held pose (Tracker::Track, SkipFrame).
   auto read = [&](int i) {
-    return std::async(std::launch::async, [&sequence, index = args.first_frame + i] {
-      return sequence.TryReadFrame(index);
+    return std::async(std::launch::async, [&sequence, &found, index = start_index + i] {
+      return found && found->index == index ? found->frame : sequence.TryReadFrame(index);
     });
   };
   int unreadable = 0;  // frames with a colour image that could not be read
@@ -219,10 +237,12 @@ void RunTrack(const TrackArgs& args) {
     }
     if (image_missing) ++unreadable;
     Timer timer;
-    const TrackResult r = tracker.Track(frame);
+    const TrackResult r = i == 0 && found ? found->pose.tracked : tracker.Track(frame);
     // A model built beside the tracking takes over at this frame boundary.
     if (updater) updater->AfterTracked(frame, r, &tracker);
-    const double ms = timer.ElapsedMilliseconds();
+    // The frame where the model was found took the search.
+    const double ms =
+        i == 0 && found ? found->pose.match_ms + found->pose.align_ms : timer.ElapsedMilliseconds();
     sum_process_ms += ms;
     sum_times += r.summary.times;
     const PoseRecord record = r.ToPoseRecord(frame.frame_id, frame.time_s, ms);
@@ -230,7 +250,7 @@ void RunTrack(const TrackArgs& args) {
     records.push_back(record);
     if (r.status != TrackStatus::kTracking) ++lost;
     std::string error_text;
-    if (const std::optional<Rigid3d> gt = sequence.GroundTruth(args.first_frame + i)) {
+    if (const std::optional<Rigid3d> gt = sequence.GroundTruth(start_index + i)) {
       const PoseDifference d = Difference(r.world_from_obj, *gt);
       const double t_mm = 1e3 * d.translation, r_deg = d.rotation_rad * 180.0 / M_PI;
       sum_t_mm += t_mm;
@@ -319,7 +339,8 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_flag("--unknown", args->unknown,
                 "No model file: build the model on-line from the frames (--init gt, --roi or "
                 "--mask says where the object is)");
-  cmd->add_option("--roi", args->object.roi, "--unknown: object region x,y,w,h (reference image)");
+  cmd->add_option("--roi", args->object.roi,
+                  "--unknown or --init auto: object region x,y,w,h (reference image)");
   cmd->add_option("--mask", args->object.mask, "--unknown: object mask image (non-zero = object)");
   cmd->add_option("--depth", args->object.depth,
                   "--unknown: depth source planesweep, stereo or sensor (default: sensor with "
@@ -338,8 +359,12 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_option("--save-model", args->save_model,
                   "Write the model in use at the end (.ply/.obj, millimetres)");
   cmd->add_option("--init", args->init,
-                  "Initial pose: 'gt' (first frame's ground truth) or tx,ty,tz,qx,qy,qz,qw "
-                  "(metres, world frame); required but with --unknown --roi/--mask");
+                  "Initial pose: 'gt' (first frame's ground truth), 'auto' (found from the "
+                  "model's views in --roi, or in the region the interest filters select) or "
+                  "tx,ty,tz,qx,qy,qz,qw (metres, world frame); required but with --unknown "
+                  "--roi/--mask");
+  cmd->add_option("--filters", args->filters,
+                  "--init auto without --roi: interest filter bank (YAML; default: motion)");
   cmd->add_option("--config", args->config, "Tracker options (YAML)");
   cmd->add_option("--cameras", args->cameras, "Comma-separated cameras to use (default: all)");
   cmd->add_option("--out", args->out, "Pose stream to write (.csv or .jsonl)");

@@ -12,6 +12,8 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "unseen/eval/cli_testing.h"
@@ -101,6 +103,45 @@ TEST_F(TrackCli, UnreadableAndMissingFramesAreReportedLostAndTrackingGoesOn) {
   fs::remove(poses);
   fs::remove(stats);
   fs::remove_all(overlay);
+}
+
+// --init auto: the pose of the known model from its box (here the true visible mask's),
+// without any pose given; a box where the object is not is an error, not a guess.
+TEST_F(TrackCli, InitAutoFindsThePoseFromTheObjectsBox) {
+  const cv::Mat mask =
+      cv::imread((fs::path(dir_) / "cam0" / "mask_visib" / "000000_000000.png").string(),
+                 cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(mask.empty());
+  const cv::Rect box = cv::boundingRect(mask);
+  const std::string poses = TempPath("auto_poses.csv");
+  const RunResult r = RunCli(fmt::format("track '{}' --init auto --roi {},{},{},{} --out '{}'",
+                                         dir_, box.x, box.y, box.width, box.height, poses));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("--init auto: frame 0: found"), std::string::npos) << r.err;
+  const std::vector<PoseRecord> records = ReadPoseStream(poses);
+  ASSERT_EQ(records.size(), 12u);
+  const Sequence sequence = Sequence::Open(dir_);
+  for (const PoseRecord& p : records) {
+    EXPECT_EQ(p.status, TrackStatus::kTracking) << "frame " << p.frame;
+    const PoseDifference d = Difference(p.world_from_obj, *sequence.GroundTruth(p.frame));
+    EXPECT_LT(d.translation, 0.005) << "frame " << p.frame;
+    EXPECT_LT(d.rotation_rad, 0.02) << "frame " << p.frame;
+  }
+  fs::remove(poses);
+
+  // A box over the background (the cube is elsewhere): no pose, said clearly.
+  const int x = box.x > 200 ? 10 : 380;
+  const RunResult nowhere =
+      RunCli(fmt::format("track '{}' --init auto --roi {},20,100,100", dir_, x));
+  EXPECT_NE(nowhere.exit_code, 0);
+  EXPECT_NE(nowhere.err.find("no confident pose of the model in --roi"), std::string::npos)
+      << nowhere.err;
+  // Options that do not go together.
+  const RunResult filters_without_auto =
+      RunCli(fmt::format("track '{}' --init gt --filters bank.yaml", dir_));
+  EXPECT_NE(filters_without_auto.exit_code, 0);
+  EXPECT_NE(filters_without_auto.err.find("--filters serves --init auto"), std::string::npos)
+      << filters_without_auto.err;
 }
 
 TEST_F(TrackCli, SequenceWithoutAnyImageFailsClearly) {
