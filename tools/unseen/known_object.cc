@@ -3,6 +3,7 @@
 
 #include "tools/unseen/unknown_object.h"
 #include "unseen/select/interest_filter_bank.h"
+#include "unseen/select/motion_segmentation.h"
 #include "unseen/select/region_selection.h"
 #include "unseen/util/error.h"
 #include "unseen/util/logging.h"
@@ -35,9 +36,14 @@ KnownObjectStart FindKnownObject(const Sequence& sequence, int first_frame, cons
   } else {
     bank = LoadInterestFilterBank(filters);
   }
+  // Regions of one motion each (block-based, SPEC 4.2); the background model flags mostly
+  // their edges, so a region's share and mean of interest are low even when it is the
+  // object.
+  MotionSegmenter segmenter;
   RegionSelectionOptions selection;
-  // A slowly moving object's motion mask comes in pieces (region_selection.h).
   selection.rank_by_total_interest = true;
+  selection.min_interest_share = 0.05;
+  selection.min_mean_interest = 0.05;
   int tried = 0;
   for (int i = 0; i < sequence.num_frames(); ++i) {
     Frame frame = sequence.ReadFrame(i);

@@ -1,8 +1,8 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 //
 // `--init auto` for a known model (SPEC 4.5): where the object is in the reference camera
-// (--roi, or the region the interest filter bank selects, frame by frame) and its pose
-// there (select/known_model_pose.h).
+// (--roi, or the region of one motion (motion_segmentation.h) that the interest filter
+// bank selects, frame by frame) and its pose there (select/known_model_pose.h).
 #pragma once
 
 #include <string>
