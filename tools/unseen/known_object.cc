@@ -55,16 +55,16 @@ KnownObjectStart FindKnownObject(const Sequence& sequence, int first_frame, cons
     in.time_s = frame.time_s;
     // The bank learns from every frame (the background model), also before the first.
     const cv::Mat interest = bank.Apply(in);
+    const cv::Mat regions = segmenter.Segment(in.image, interest);
     if (i < first_frame || !bank.ready()) continue;
     const RegionSelection s =
-        SelectRegion(InterestRegions(interest, selection.min_interest), interest, cv::Mat(),
-                     in.depth, rig_camera.intrinsics, selection);
+        SelectRegion(regions, interest, cv::Mat(), in.depth, rig_camera.intrinsics, selection);
     if (!s.found()) continue;
     ++tried;
-    KnownModelPoseResult pose = poser.Find(frame, camera, s.object().box);
+    const PixelRect box = segmenter.ObjectBox(s.object().box);
+    KnownModelPoseResult pose = poser.Find(frame, camera, box);
     UNSEEN_LOG_INFO("{}: --init auto: frame {}: region {}x{} at ({}, {}): {}", command,
-                    frame.frame_id, s.object().box.width(), s.object().box.height(),
-                    s.object().box.x0, s.object().box.y0, pose.BriefReport());
+                    frame.frame_id, box.width(), box.height(), box.x0, box.y0, pose.BriefReport());
     if (!pose.found) continue;
     start.index = i;
     start.frame = std::move(frame);

@@ -54,6 +54,14 @@ MotionSegmenter::MotionSegmenter(const MotionSegmentationOptions& options)
     : options_((options.Check(), options)),
       dis_(cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_FAST)) {}
 
+PixelRect MotionSegmenter::ObjectBox(const PixelRect& region_box) const {
+  const int inset = options_.block_px / 2;
+  if (region_box.width() <= 2 * inset + 2 || region_box.height() <= 2 * inset + 2) {
+    return region_box;
+  }
+  return region_box.Grow(-inset);
+}
+
 cv::Mat MotionSegmenter::Segment(const cv::Mat& image, const cv::Mat& interest) {
   UNSEEN_CHECK(image.type() == CV_32FC3 || image.type() == CV_8UC3,
                "motion segmentation: the image must be CV_32FC3 or CV_8UC3 (type {})",

@@ -15,6 +15,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "unseen/camera/camera.h"
+
 namespace unseen {
 
 struct MotionSegmentationOptions {
@@ -51,6 +53,10 @@ class MotionSegmenter {
   // The last dense flow (CV_32FC2, previous -> current frame, px), empty before the
   // second frame; and the number of regions of the last Segment.
   const cv::Mat& flow() const { return flow_; }
+  // A region's box (e.g. RegionCandidate::box) brought in by half a block on each side:
+  // the blocks along a moving object's outline are only partly on it, and the dense flow
+  // spreads a little over the background beside it (measured: about a block in all).
+  PixelRect ObjectBox(const PixelRect& region_box) const;
   int num_regions() const { return num_regions_; }
 
  private:

@@ -1,0 +1,166 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/system/system.h"
+
+#include <fmt/format.h>
+
+#include "unseen/util/error.h"
+#include "unseen/util/logging.h"
+
+namespace unseen {
+
+const char* ToString(SystemStatus status) {
+  switch (status) {
+    case SystemStatus::kLearning:
+      return "learning";
+    case SystemStatus::kNoObject:
+      return "no object";
+    case SystemStatus::kTracking:
+      return "tracking";
+    case SystemStatus::kLost:
+      return "lost";
+  }
+  return "?";
+}
+
+SystemOptions::SystemOptions() {
+  selection.rank_by_total_interest = true;
+  selection.min_interest_share = 0.05;
+  selection.min_mean_interest = 0.05;
+}
+
+void SystemOptions::Check() const {
+  segmentation.Check();
+  selection.Check();
+  known_pose.Check();
+  update.Check();
+  UNSEEN_CHECK(reselect_after_lost_frames >= 1,
+               "system: reselect_after_lost_frames {} must be >= 1", reselect_after_lost_frames);
+}
+
+System::System(const Rig& rig, int reference, std::optional<Mesh> model, InterestFilterBank bank,
+               const SystemOptions& options, const TrackerOptions& tracker_options,
+               const ModellerOptions& modeller_options)
+    : rig_(rig),
+      reference_(reference),
+      known_model_(model.has_value()),
+      bank_(std::move(bank)),
+      options_((options.Check(), options)),
+      tracker_options_(tracker_options),
+      segmenter_(options.segmentation) {
+  rig_.Check();
+  UNSEEN_CHECK(reference >= 0 && reference < rig_.size(),
+               "system: reference camera {} not in [0, {})", reference, rig_.size());
+  UNSEEN_CHECK(bank_.size() > 0, "system: the interest filter bank is empty");
+  if (known_model_) {
+    tracker_ = std::make_unique<Tracker>(rig_, std::move(*model), tracker_options_);
+    poser_ = std::make_unique<KnownModelPoser>(tracker_.get(), options_.known_pose);
+  } else {
+    modeller_ = std::make_unique<Modeller>(rig_, reference_, modeller_options);
+  }
+}
+
+System::~System() {
+  updater_.reset();  // its builds refer to the tracker
+}
+
+bool System::Start(const Frame& frame, const RegionCandidate& region, const cv::Mat& labels,
+                   SystemStep* step) {
+  if (known_model_) {
+    const PixelRect box =
+        options_.regions == RegionSource::kMotion ? segmenter_.ObjectBox(region.box) : region.box;
+    const KnownModelPoseResult found = poser_->Find(frame, reference_, box);
+    step->note = fmt::format("known model in {}x{} at ({}, {}): {}", box.width(), box.height(),
+                             box.x0, box.y0, found.BriefReport());
+    if (!found.found) return false;
+    step->track = found.tracked;
+    return true;
+  }
+  // An unknown object: its frame at the region (SPEC 4.4) and a first model there.
+  const cv::Mat mask = labels.empty() ? cv::Mat() : cv::Mat(labels == region.label);
+  const std::optional<Rigid3d> start = modeller_->InitialPose(frame, region.box, mask);
+  if (!start) {
+    step->note = "no depth measured in the region: cannot place the object";
+    return false;
+  }
+  const ModelBuild build = modeller_->Build(frame, *start, region.box, mask);
+  if (!build.ok()) {
+    step->note = "cannot model the object: " + build.why;
+    return false;
+  }
+  updater_.reset();
+  updater_ = std::make_unique<ModelUpdater>(modeller_.get(), options_.update);
+  Mesh first = updater_->Start(build);
+  const int triangles = first.num_triangles();
+  tracker_ = std::make_unique<Tracker>(rig_, std::move(first), tracker_options_);
+  tracker_->Initialize(build.world_from_obj);
+  step->track = tracker_->Track(frame);
+  step->note = fmt::format("modelled: {} triangles", triangles);
+  return true;
+}
+
+SystemStep System::Step(const Frame& frame) {
+  UNSEEN_CHECK(static_cast<int>(frame.images.size()) == rig_.size(),
+               "system: frame {} has {} images for {} cameras", frame.frame_id, frame.images.size(),
+               rig_.size());
+  SystemStep step;
+  step.frame_id = frame.frame_id;
+  const cv::Mat& image = frame.images[reference_];
+  cv::Mat labels;
+  if (!image.empty()) {
+    const RigCamera& camera = rig_.cameras[reference_];
+    FilterFrame in;
+    in.image = image;
+    if (!frame.depths.empty()) in.depth = frame.depths[reference_];
+    in.camera = camera.intrinsics;
+    in.world_from_cam = camera.world_from_cam;
+    in.time_s = frame.time_s;
+    // Every frame teaches the background model and the motion segmentation, also while
+    // tracking (SPEC 6).
+    step.interest = bank_.Apply(in);
+    const cv::Mat segments = segmenter_.Segment(image, step.interest);
+    labels = options_.regions == RegionSource::kMotion
+                 ? segments
+                 : InterestRegions(step.interest, options_.selection.min_interest);
+  }
+
+  if (active_) {
+    step.track = tracker_->Track(frame);
+    if (updater_) updater_->AfterTracked(frame, *step.track, tracker_.get());
+    if (step.track->status == TrackStatus::kTracking) {
+      lost_frames_ = 0;
+      step.status = SystemStatus::kTracking;
+      return step;
+    }
+    step.status = SystemStatus::kLost;
+    if (++lost_frames_ < options_.reselect_after_lost_frames) return step;
+    step.note = fmt::format("lost for {} frames: searching for the object again", lost_frames_);
+    active_ = false;
+    lost_frames_ = 0;
+    return step;
+  }
+
+  if (image.empty()) {
+    step.status = SystemStatus::kNoObject;
+    step.note = "no image from the reference camera";
+    return step;
+  }
+  if (!bank_.ready()) {
+    step.status = SystemStatus::kLearning;
+    return step;
+  }
+  const cv::Mat depth = frame.depths.empty() ? cv::Mat() : frame.depths[reference_];
+  const RegionSelection selection =
+      SelectRegion(labels, step.interest, cv::Mat(), depth, rig_.cameras[reference_].intrinsics,
+                   options_.selection);
+  step.status = SystemStatus::kNoObject;
+  if (!selection.found()) return step;
+  const RegionCandidate& region = selection.object();
+  step.region = region.box;
+  if (!Start(frame, region, labels, &step)) return step;
+  active_ = true;
+  lost_frames_ = 0;
+  step.status = SystemStatus::kTracking;
+  return step;
+}
+
+}  // namespace unseen

@@ -1,0 +1,111 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// The complete system (SPEC 6, thesis 5.1): frame by frame, the interest filter bank and
+// the motion segmentation run on the reference camera (the background model learns every
+// frame); until an object is tracked, the region selection looks for the object of
+// interest; a selected region gives a pose — a known model's by its views
+// (select/known_model_pose.h), an unknown object's frame by SPEC 4.4 and its first model
+// built there (model/modeller.h) — and the tracker follows it, the model kept current
+// beside the tracking (model/model_updater.h). When the track has been lost for a while
+// the object is searched for again. Every frame's outcome is a status, never an error:
+// learning the background, no object of interest yet, tracking, lost.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "unseen/camera/camera.h"
+#include "unseen/io/sequence.h"
+#include "unseen/mesh/mesh.h"
+#include "unseen/model/model_updater.h"
+#include "unseen/model/modeller.h"
+#include "unseen/select/interest_filter_bank.h"
+#include "unseen/select/known_model_pose.h"
+#include "unseen/select/motion_segmentation.h"
+#include "unseen/select/region_selection.h"
+#include "unseen/track/tracker.h"
+
+namespace unseen {
+
+enum class SystemStatus {
+  kLearning,  // the interest filters are still learning (the background model)
+  kNoObject,  // no object of interest this frame (or none that could be placed)
+  kTracking,
+  kLost,  // the tracker lost the object; it searches, then the selection takes over
+};
+const char* ToString(SystemStatus status);  // "learning", "no object", "tracking", "lost"
+
+// Where the candidate regions come from.
+enum class RegionSource {
+  kMotion,    // block-based motion segmentation (a moving object before a still camera)
+  kInterest,  // the interest map's connected parts (e.g. a position filter: a still object)
+};
+
+struct SystemOptions {
+  SystemOptions();  // the selection's thresholds for regions of motion (below)
+  RegionSource regions = RegionSource::kMotion;
+  MotionSegmentationOptions segmentation;
+  // Motion regions hold the whole object while the background model flags mostly its
+  // edges: the constructor lowers the share and mean of interest to 0.05 and ranks by
+  // total interest.
+  RegionSelectionOptions selection;
+  KnownModelPoseOptions known_pose;
+  ModelUpdateOptions update;
+  // The object is searched for again after this many frames lost in a row.
+  int reselect_after_lost_frames = 10;
+  void Check() const;
+};
+
+// One frame's outcome.
+struct SystemStep {
+  int frame_id = 0;
+  SystemStatus status = SystemStatus::kLearning;
+  std::optional<TrackResult> track;  // the tracker's result, when it ran this frame
+  PixelRect region;                  // the selected region, when one was (reference image)
+  cv::Mat interest;                  // the reference camera's interest map (CV_32FC1)
+  std::string note;                  // what happened, for the log ("found ...", "model ...")
+};
+
+class System {
+ public:
+  // `model`: the object's model (metres), or std::nullopt to model it on-line with
+  // `modeller_options` (which need a depth source the rig can serve). `reference`: the
+  // camera the object is selected (and modelled) in. Throws unseen::Error for invalid
+  // options, rig or model.
+  System(const Rig& rig, int reference, std::optional<Mesh> model, InterestFilterBank bank,
+         const SystemOptions& options = {}, const TrackerOptions& tracker_options = {},
+         const ModellerOptions& modeller_options = {});
+  ~System();
+
+  // Processes one frame (Frame::images one per rig camera; depths optional). Never
+  // throws for what the scene does (no object, object gone); throws unseen::Error for a
+  // frame of the wrong shape.
+  SystemStep Step(const Frame& frame);
+
+  // The tracker while one exists (it is replaced when an unknown object is modelled anew).
+  const Tracker* tracker() const { return tracker_.get(); }
+  const ModelUpdater* updater() const { return updater_.get(); }
+  bool tracking() const { return active_; }
+
+ private:
+  // Looks for the object in the selected region; true when tracking starts.
+  bool Start(const Frame& frame, const RegionCandidate& region, const cv::Mat& labels,
+             SystemStep* step);
+
+  Rig rig_;
+  int reference_;
+  bool known_model_;
+  InterestFilterBank bank_;
+  SystemOptions options_;
+  TrackerOptions tracker_options_;
+  MotionSegmenter segmenter_;
+  std::unique_ptr<Tracker> tracker_;
+  std::unique_ptr<KnownModelPoser> poser_;
+  std::unique_ptr<Modeller> modeller_;
+  std::unique_ptr<ModelUpdater> updater_;
+  bool active_ = false;
+  int lost_frames_ = 0;
+};
+
+}  // namespace unseen

@@ -1,0 +1,118 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/system/system.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "unseen/mesh/primitives.h"
+#include "unseen/track/test_scene.h"
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+// The lettered cube drifting and turning before a still camera.
+Rigid3d CubeAt(int t) {
+  return Rigid3d(ExpSO3(Eigen::Vector3d(0.4 + 0.02 * t, 0.6, 0.1 + 0.01 * t)),
+                 Eigen::Vector3d(-0.08 + 0.004 * t, 0.01, 0.9));
+}
+
+InterestFilterBank MotionBank() {
+  InterestFilterBank bank;
+  bank.Add(std::make_unique<MotionFilter>(MotionFilterOptions()));
+  return bank;
+}
+
+Frame FrameOf(const cv::Mat& image, int t) {
+  Frame frame;
+  frame.frame_id = t;
+  frame.time_s = t / 30.0;
+  frame.images = {image};
+  return frame;
+}
+
+// A known model: learning, then the moving cube is selected, posed and tracked; when it
+// leaves the view the system reports it lost, then no object; when it comes back it is
+// found again.
+TEST(System, FindsTracksLosesAndFindsAgainAKnownObject) {
+  const Mesh cube = MakeLetteredCube(0.096, 64);
+  const Rig rig = testing::OneCameraRig();
+  const RigCamera& camera = rig.cameras[0];
+  const cv::Mat background = testing::Background(camera.intrinsics, 21);
+  SystemOptions options;
+  options.reselect_after_lost_frames = 3;
+  System system(rig, 0, cube, MotionBank(), options);
+  int first_tracked = -1;
+  for (int t = 0; t < 30; ++t) {
+    const SystemStep step =
+        system.Step(FrameOf(testing::RenderOverBackground(cube, camera, CubeAt(t), background), t));
+    if (t < 7) EXPECT_EQ(step.status, SystemStatus::kLearning) << "frame " << t;
+    if (step.status == SystemStatus::kTracking) {
+      if (first_tracked < 0) first_tracked = t;
+      ASSERT_TRUE(step.track.has_value());
+      EXPECT_LT(Difference(step.track->world_from_obj, CubeAt(t)).translation, 0.005)
+          << "frame " << t;
+    } else if (first_tracked >= 0) {
+      ADD_FAILURE() << "frame " << t << ": " << ToString(step.status) << " after tracking";
+    }
+  }
+  ASSERT_GE(first_tracked, 7);
+  EXPECT_LE(first_tracked, 15);
+  EXPECT_TRUE(system.tracking());
+
+  // The cube is gone: lost, then searched for (no object).
+  std::vector<SystemStatus> gone;
+  for (int t = 30; t < 40; ++t) gone.push_back(system.Step(FrameOf(background.clone(), t)).status);
+  // The tracker calls a track lost after FailureOptions::lost_after_frames bad frames.
+  EXPECT_NE(std::find(gone.begin(), gone.begin() + 3, SystemStatus::kLost), gone.begin() + 3);
+  EXPECT_EQ(gone.back(), SystemStatus::kNoObject);
+  EXPECT_FALSE(system.tracking());
+
+  // It comes back elsewhere and is found again.
+  bool found_again = false;
+  for (int t = 40; t < 60 && !found_again; ++t) {
+    const Rigid3d pose = CubeAt(t - 35);
+    const SystemStep step =
+        system.Step(FrameOf(testing::RenderOverBackground(cube, camera, pose, background), t));
+    if (step.status == SystemStatus::kTracking) {
+      found_again = true;
+      EXPECT_LT(Difference(step.track->world_from_obj, pose).translation, 0.005);
+    }
+  }
+  EXPECT_TRUE(found_again);
+}
+
+// Nothing moves: never an object, never a pose.
+TEST(System, NoMovingObjectIsNoObject) {
+  const Rig rig = testing::OneCameraRig();
+  System system(rig, 0, MakeLetteredCube(0.096, 16), MotionBank());
+  const cv::Mat still = testing::Background(rig.cameras[0].intrinsics, 4);
+  for (int t = 0; t < 15; ++t) {
+    const SystemStep step = system.Step(FrameOf(still, t));
+    EXPECT_EQ(step.status, t < 7 ? SystemStatus::kLearning : SystemStatus::kNoObject);
+    EXPECT_FALSE(step.track.has_value());
+  }
+}
+
+TEST(System, RejectsWrongInput) {
+  const Rig rig = testing::OneCameraRig();
+  EXPECT_THROW(System(rig, 1, MakeLetteredCube(0.096, 16), MotionBank()), Error);
+  EXPECT_THROW(System(rig, 0, MakeLetteredCube(0.096, 16), InterestFilterBank()), Error);
+  SystemOptions options;
+  options.reselect_after_lost_frames = 0;
+  EXPECT_THROW(System(rig, 0, MakeLetteredCube(0.096, 16), MotionBank(), options), Error);
+  // One camera without depth cannot model an unknown object.
+  EXPECT_THROW(System(rig, 0, std::nullopt, MotionBank()), Error);
+  System system(rig, 0, MakeLetteredCube(0.096, 16), MotionBank());
+  Frame two;
+  two.images = {cv::Mat(), cv::Mat()};
+  EXPECT_THROW(system.Step(two), Error);
+  Frame none;
+  none.images = {cv::Mat()};
+  EXPECT_EQ(system.Step(none).status, SystemStatus::kNoObject);  // a dropped frame
+}
+
+}  // namespace
+}  // namespace unseen

@@ -1,0 +1,227 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// `unseen run SOURCE`: the complete system (SPEC 6, system/system.h) on a sequence folder, a
+// video file or image folder with its calibration, or a live camera (--camera N): learn the
+// background, select the object, model it (or use --model), track it, and search again
+// when it is lost. Writes the pose stream in the system's own object frame (score it with
+// `unseen eval --align-first`) and prints the statuses, the speed and, when the source has
+// ground truth, the error after aligning the first tracked pose.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "tools/unseen/commands.h"
+#include "tools/unseen/unknown_object.h"
+#include "unseen/camera/calibration_io.h"
+#include "unseen/eval/overlay.h"
+#include "unseen/io/pose_stream.h"
+#include "unseen/mesh/mesh_io.h"
+#include "unseen/system/frame_source.h"
+#include "unseen/system/system.h"
+#include "unseen/util/error.h"
+#include "unseen/util/logging.h"
+#include "unseen/util/timer.h"
+
+namespace unseen::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunArgs {
+  std::string source;
+  int camera = -1;  // live camera index
+  std::string calibration;
+  std::string model;
+  std::string model_units = "mm";
+  std::string filters;
+  std::string regions = "motion";
+  std::string config;        // tracker options
+  UnknownObjectArgs object;  // --depth, --model-config
+  std::string update = "incremental";
+  std::string out;
+  std::string overlay;
+  int max_frames = 0;
+  int reselect_after = 10;
+};
+
+bool IsSequenceFolder(const fs::path& p) {
+  return fs::exists(p / "sequence.json") || fs::exists(p / "scene_camera.json");
+}
+
+std::unique_ptr<FrameSource> OpenSource(const RunArgs& args) {
+  if (args.camera >= 0) {
+    UNSEEN_CHECK(args.source.empty(), "run: give SOURCE or --camera, not both");
+    UNSEEN_CHECK(!args.calibration.empty(), "run: --camera {} needs --calibration FILE",
+                 args.camera);
+    return std::make_unique<CaptureFrameSource>(args.camera,
+                                                LoadCameraCalibration(args.calibration));
+  }
+  UNSEEN_CHECK(!args.source.empty(),
+               "run: give SOURCE (a sequence folder, video or image "
+               "folder) or --camera N");
+  UNSEEN_CHECK(fs::exists(args.source), "run: source '{}' does not exist", args.source);
+  if (fs::is_directory(args.source) && IsSequenceFolder(args.source)) {
+    return std::make_unique<SequenceFrameSource>(Sequence::Open(args.source));
+  }
+  UNSEEN_CHECK(!args.calibration.empty(),
+               "run: '{}' is not a sequence folder: a video or image folder needs --calibration "
+               "FILE",
+               args.source);
+  const PinholeCamera camera = LoadCameraCalibration(args.calibration);
+  if (fs::is_directory(args.source)) {
+    return std::make_unique<SequenceFrameSource>(Sequence::OpenImageFolder(args.source, camera));
+  }
+  // A video file is read as a live camera is (the same code path).
+  return std::make_unique<CaptureFrameSource>(args.source, camera);
+}
+
+void RunSystem(const RunArgs& args) {
+  std::unique_ptr<FrameSource> source = OpenSource(args);
+  const Sequence* sequence = source->sequence();
+  UNSEEN_CHECK(args.model_units == "mm" || args.model_units == "m",
+               "run: --model-units '{}' must be mm or m", args.model_units);
+  std::optional<Mesh> model;
+  if (!args.model.empty()) model = LoadMesh(args.model, args.model_units == "mm" ? 0.001 : 1.0);
+
+  SystemOptions options;
+  UNSEEN_CHECK(args.regions == "motion" || args.regions == "interest",
+               "run: --regions '{}' must be motion or interest", args.regions);
+  options.regions = args.regions == "motion" ? RegionSource::kMotion : RegionSource::kInterest;
+  options.reselect_after_lost_frames = args.reselect_after;
+  try {
+    options.update.mode = ParseModelUpdateMode(args.update);
+  } catch (const Error& e) {
+    ThrowError("run: --update: {}", e.what());
+  }
+  TrackerOptions tracker_options =
+      args.config.empty() ? TrackerOptions() : LoadTrackerOptions(args.config);
+  if (source->fps() > 0) tracker_options.frame_interval_s = 1.0 / source->fps();
+  ModellerOptions modeller_options;
+  if (!model) {
+    if (sequence != nullptr) {
+      modeller_options = ModellerOptionsFor(args.object, *sequence, "run");
+    } else if (!args.object.model_config.empty()) {
+      modeller_options = LoadModellerOptions(args.object.model_config, modeller_options);
+    }
+    UNSEEN_CHECK(modeller_options.depth.source != DepthSourceKind::kSensor ||
+                     (sequence != nullptr && sequence->has_depth()),
+                 "run: an object without --model is modelled from depth: '{}' has no depth "
+                 "images and {} camera(s); give --model FILE, or a source with depth or with "
+                 "two cameras or more",
+                 source->name(), source->rig().size());
+  }
+  InterestFilterBank bank;
+  if (args.filters.empty()) {
+    bank.Add(std::make_unique<MotionFilter>(MotionFilterOptions()));
+  } else {
+    bank = LoadInterestFilterBank(args.filters);
+  }
+  System system(source->rig(), source->reference_camera(), std::move(model), std::move(bank),
+                options, tracker_options, modeller_options);
+
+  std::unique_ptr<PoseStreamWriter> writer;
+  if (!args.out.empty()) writer = std::make_unique<PoseStreamWriter>(args.out);
+  std::vector<PoseRecord> records;
+  std::map<SystemStatus, int> statuses;
+  int frames = 0;
+  double sum_ms = 0.0;
+  // The system's object frame to the true one (a fixed change of object frame), from the
+  // first tracked frame, as `eval --align-first` does.
+  std::optional<Rigid3d> system_obj_from_true_obj;
+  double sum_t_mm = 0.0, sum_r_deg = 0.0;
+  int scored = 0, within = 0, with_truth = 0;
+  while (args.max_frames <= 0 || frames < args.max_frames) {
+    std::optional<Frame> frame = source->Next();
+    if (!frame) break;
+    for (const FrameReadError& e : frame->errors) {
+      UNSEEN_LOG_WARN("run: frame {}: camera {}: {}", frame->frame_id, e.camera, e.message);
+    }
+    Timer timer;
+    const SystemStep step = system.Step(*frame);
+    const double ms = timer.ElapsedMilliseconds();
+    sum_ms += ms;
+    ++frames;
+    ++statuses[step.status];
+    if (!step.note.empty()) {
+      UNSEEN_LOG_INFO("run: frame {}: {}: {}", frame->frame_id, ToString(step.status), step.note);
+    }
+    const std::optional<Rigid3d> truth =
+        sequence != nullptr ? sequence->GroundTruth(frames - 1) : std::nullopt;
+    with_truth += truth.has_value();
+    if (!step.track) continue;
+    const PoseRecord record = step.track->ToPoseRecord(frame->frame_id, frame->time_s, ms);
+    if (writer) writer->Write(record);
+    records.push_back(record);
+    if (truth && step.status == SystemStatus::kTracking) {
+      if (!system_obj_from_true_obj) {
+        system_obj_from_true_obj = step.track->world_from_obj.Inverse() * *truth;
+      }
+      const PoseDifference d =
+          Difference(step.track->world_from_obj * *system_obj_from_true_obj, *truth);
+      sum_t_mm += 1e3 * d.translation;
+      sum_r_deg += d.rotation_rad * 180.0 / M_PI;
+      ++scored;
+      within += d.translation < 0.05 && d.rotation_rad * 180.0 / M_PI < 5.0;
+    }
+  }
+  std::printf("run %s: %d frames, %.1f fps (%.2f ms/frame)\n", source->name().c_str(), frames,
+              sum_ms > 0 ? 1e3 * frames / sum_ms : 0.0, frames ? sum_ms / frames : 0.0);
+  std::printf("  frames:");
+  for (const SystemStatus s : {SystemStatus::kLearning, SystemStatus::kNoObject,
+                               SystemStatus::kTracking, SystemStatus::kLost}) {
+    std::printf(" %s %d", ToString(s), statuses[s]);
+  }
+  std::printf("\n");
+  if (with_truth > 0) {
+    std::printf(
+        "  against ground truth after aligning the first tracked pose: %d of %d frames "
+        "(%.1f %%) within 5 cm/5 deg; mean %.2f mm %.3f deg over the %d tracked\n",
+        within, with_truth, 100.0 * within / with_truth, scored ? sum_t_mm / scored : 0.0,
+        scored ? sum_r_deg / scored : 0.0, scored);
+  }
+  if (!args.overlay.empty()) {
+    UNSEEN_CHECK(sequence != nullptr,
+                 "run: --overlay needs a sequence, image folder or video "
+                 "source read as a sequence");
+    WriteOverlay(*sequence, records, sequence->reference_camera(), args.overlay);
+  }
+}
+
+void AddRunCommand(CLI::App& app) {
+  auto args = std::make_shared<RunArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "run", "The whole system: select the object, model it (or --model), track it");
+  cmd->add_option("SOURCE", args->source,
+                  "Sequence folder, video file or image folder (the latter two with "
+                  "--calibration)");
+  cmd->add_option("--camera", args->camera, "Live camera index (OpenCV VideoCapture)");
+  cmd->add_option("--calibration", args->calibration,
+                  "Camera calibration (OpenCV YAML/XML/JSON or ROS camera_info)");
+  cmd->add_option("--model", args->model, "The object's model; without it, modelled on-line");
+  cmd->add_option("--model-units", args->model_units, "Units of --model: mm (BOP) or m");
+  cmd->add_option("--filters", args->filters, "Interest filter bank (YAML; default: motion)");
+  cmd->add_option("--regions", args->regions,
+                  "Candidate regions: motion (segmentation; default) or interest (the "
+                  "interest map's parts, e.g. with a position filter)");
+  cmd->add_option("--config", args->config, "Tracker options (YAML)");
+  cmd->add_option("--depth", args->object.depth,
+                  "No --model: depth source planesweep, stereo or sensor");
+  cmd->add_option("--model-config", args->object.model_config, "No --model: modeller options");
+  cmd->add_option("--update", args->update, "No --model: incremental, periodic or none");
+  cmd->add_option("--reselect-after", args->reselect_after,
+                  "Frames lost in a row before the object is searched for again");
+  cmd->add_option("--out", args->out, "Pose stream to write (.csv or .jsonl)");
+  cmd->add_option("--overlay", args->overlay, "Overlay video (.mp4/.avi) or PNG folder");
+  cmd->add_option("--max-frames", args->max_frames, "Process at most N frames");
+  cmd->callback([args] { RunSystem(*args); });
+}
+
+}  // namespace
+
+UNSEEN_REGISTER_COMMAND("run", AddRunCommand);
+
+}  // namespace unseen::cli
