@@ -142,4 +142,54 @@ void PositionFilter::Apply(const FilterFrame& frame, cv::Mat* interest) {
   }
 }
 
+void VelocityFilterOptions::Check() const {
+  UNSEEN_CHECK(direction.allFinite() && direction.norm() > 1e-9,
+               "velocity filter: direction [{}, {}] has no length", direction.x(), direction.y());
+  UNSEEN_CHECK(std::isfinite(min_speed_px) && min_speed_px >= 0.0,
+               "velocity filter: min_speed_px {} must be >= 0", min_speed_px);
+  UNSEEN_CHECK(max_angle_deg > 0.0 && max_angle_deg <= 180.0,
+               "velocity filter: max_angle_deg {} not in (0, 180]", max_angle_deg);
+}
+
+VelocityFilter::VelocityFilter(const VelocityFilterOptions& options)
+    : options_((options.Check(), options)),
+      flow_(cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_FAST)) {}
+
+void VelocityFilter::Apply(const FilterFrame& frame, cv::Mat* interest) {
+  CheckInputs(name(), frame, *interest);
+  cv::Mat grey_float, grey;
+  cv::cvtColor(frame.image, grey_float, cv::COLOR_BGR2GRAY);
+  grey_float.convertTo(grey, CV_8U, 255.0);
+  UNSEEN_CHECK(previous_.empty() || previous_.size() == grey.size(),
+               "velocity filter: the image is {}x{}; the previous one was {}x{}", grey.cols,
+               grey.rows, previous_.cols, previous_.rows);
+  if (previous_.empty()) {
+    previous_ = grey;
+    interest->setTo(0.0f);
+    return;
+  }
+  cv::Mat flow;
+  flow_->calc(previous_, grey, flow);
+  previous_ = grey;
+  ready_ = true;
+  const Eigen::Vector2f d = options_.direction.normalized().cast<float>();
+  const float cos_max = static_cast<float>(std::cos(options_.max_angle_deg * M_PI / 180.0));
+  const float min_speed = static_cast<float>(options_.min_speed_px);
+  for (int y = 0; y < flow.rows; ++y) {
+    const cv::Vec2f* f = flow.ptr<cv::Vec2f>(y);
+    float* s = interest->ptr<float>(y);
+    for (int x = 0; x < flow.cols; ++x) {
+      if (s[x] <= 0.0f) continue;  // (2.4): a later filter skips what is of no interest
+      const float speed = std::hypot(f[x][0], f[x][1]);
+      if (speed < min_speed || speed <= 0.0f) {
+        s[x] = 0.0f;
+        continue;
+      }
+      const float cosine = (f[x][0] * d.x() + f[x][1] * d.y()) / speed;
+      const float along = cos_max < 1.0f ? (cosine - cos_max) / (1.0f - cos_max) : 0.0f;
+      s[x] *= std::clamp(along, 0.0f, 1.0f);
+    }
+  }
+}
+
 }  // namespace unseen

@@ -7,13 +7,15 @@
 // configuration file are in interest_filter_bank.h; the filters shipped here:
 //  * ColourFilter (2.5): closeness to one of a few reference colours;
 //  * MotionFilter: moving pixels, by OpenCV's adaptive background model (MOG2);
-//  * PositionFilter: pixels whose 3-D point (from the depth image) lies in a box.
+//  * PositionFilter: pixels whose 3-D point (from the depth image) lies in a box;
+//  * VelocityFilter: pixels moving along a given image direction (dense optical flow).
 #pragma once
 
 #include <Eigen/Core>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/video/background_segm.hpp>
+#include <opencv2/video/tracking.hpp>
 #include <string>
 #include <vector>
 
@@ -111,6 +113,35 @@ class PositionFilter : public InterestFilter {
 
  private:
   PositionFilterOptions options_;
+};
+
+// ---- velocity ------------------------------------------------------------------------
+
+struct VelocityFilterOptions {
+  // Interest where the image moves along this direction (image axes, x right, y down; any
+  // length) at least min_speed_px a frame: S = clamp((cos(angle) - cos(max_angle)) /
+  // (1 - cos(max_angle)), 0, 1), the angle between the pixel's flow and the direction.
+  Eigen::Vector2d direction = Eigen::Vector2d::UnitX();
+  double min_speed_px = 0.5;
+  double max_angle_deg = 45.0;
+  void Check() const;
+};
+
+// Motion along a direction (SPEC 4.1's velocity IF: a conveyor's parts, a car coming from
+// the left), from OpenCV's DIS dense optical flow between consecutive frames. Judges from
+// its second frame on.
+class VelocityFilter : public InterestFilter {
+ public:
+  explicit VelocityFilter(const VelocityFilterOptions& options);
+  std::string name() const override { return "velocity"; }
+  void Apply(const FilterFrame& frame, cv::Mat* interest) override;
+  bool ready() const override { return ready_; }
+
+ private:
+  VelocityFilterOptions options_;
+  cv::Ptr<cv::DISOpticalFlow> flow_;
+  cv::Mat previous_;  // CV_8UC1 grey
+  bool ready_ = false;
 };
 
 }  // namespace unseen

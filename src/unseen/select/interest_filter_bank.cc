@@ -35,7 +35,8 @@ YamlSetter Ignore() {
 
 std::unique_ptr<InterestFilter> MakeFilter(const YAML::Node& node, const std::string& where) {
   UNSEEN_CHECK(node.IsMap() && node["type"].IsDefined() && node["type"].IsScalar(),
-               "{}: each filter is a map with a 'type' (colour, motion, position)", where);
+               "{}: each filter is a map with a 'type' (colour, motion, velocity, position)",
+               where);
   const std::string type = node["type"].Scalar();
   try {
     if (type == "colour") {
@@ -62,6 +63,18 @@ std::unique_ptr<InterestFilter> MakeFilter(const YAML::Node& node, const std::st
                         {"open_px", YamlField(&o.open_px)}});
       return std::make_unique<MotionFilter>(o);
     }
+    if (type == "velocity") {
+      std::vector<double> direction{1.0, 0.0};
+      VelocityFilterOptions o;
+      ApplyYamlSection(node, where,
+                       {{"type", Ignore()},
+                        {"direction", YamlField(&direction)},
+                        {"min_speed_px", YamlField(&o.min_speed_px)},
+                        {"max_angle_deg", YamlField(&o.max_angle_deg)}});
+      UNSEEN_CHECK(direction.size() == 2, "{}: direction must be [x, y]", where);
+      o.direction = Eigen::Vector2d(direction[0], direction[1]);
+      return std::make_unique<VelocityFilter>(o);
+    }
     if (type == "position") {
       std::vector<double> lo, hi;
       ApplyYamlSection(node, where,
@@ -79,7 +92,7 @@ std::unique_ptr<InterestFilter> MakeFilter(const YAML::Node& node, const std::st
     if (message.rfind(where, 0) == 0) throw;
     ThrowError("{}: {}", where, message);
   }
-  ThrowError("{}.type: '{}' is not a filter (colour, motion, position)", where, type);
+  ThrowError("{}.type: '{}' is not a filter (colour, motion, velocity, position)", where, type);
 }
 
 InterestFilterBank FromYaml(const YAML::Node& root, const std::string& what) {

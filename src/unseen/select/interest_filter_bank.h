@@ -11,6 +11,10 @@
 //     - type: colour          # colours_rgb: [[r, g, b], ...] in [0, 1], one radius each
 //       colours_rgb: [[0.9, 0.2, 0.1]]
 //       radii: [0.35]
+//     - type: velocity        # moving along an image direction (x right, y down)
+//       direction: [1, 0]
+//       min_speed_px: 0.5
+//       max_angle_deg: 45
 //     - type: position        # a world-frame box, metres
 //       min_m: [-0.3, -0.3, 0.4]
 //       max_m: [0.3, 0.3, 1.2]

@@ -89,6 +89,37 @@ TEST(PositionFilter, PixelsWhosePointIsInTheBox) {
   EXPECT_THROW(PositionFilter{o}, Error);
 }
 
+// The square moves 3 px to the right a frame over the still background: interest on it
+// for a filter looking rightwards, none for one looking leftwards, none on the background.
+TEST(VelocityFilter, PixelsMovingAlongTheDirection) {
+  VelocityFilterOptions right;
+  VelocityFilterOptions left;
+  left.direction = Eigen::Vector2d(-2.0, 0.0);  // any length
+  VelocityFilter to_right(right), to_left(left);
+  cv::Mat interest_right, interest_left;
+  for (int i = 0; i < 3; ++i) {
+    interest_right = Ones(cv::Size(128, 96));
+    interest_left = Ones(cv::Size(128, 96));
+    to_right.Apply(Frame(SceneWithSquareAt(40 + 3 * i)), &interest_right);
+    to_left.Apply(Frame(SceneWithSquareAt(40 + 3 * i)), &interest_left);
+    if (i == 0) {
+      EXPECT_FALSE(to_right.ready());  // no motion from one frame
+      EXPECT_EQ(cv::countNonZero(interest_right), 0);
+    }
+  }
+  EXPECT_TRUE(to_right.ready());
+  const cv::Rect on_square(49, 44, 12, 12);
+  EXPECT_GT(cv::mean(interest_right(on_square))[0], 0.7);
+  EXPECT_LT(cv::mean(interest_left(on_square))[0], 0.05);
+  EXPECT_LT(cv::mean(interest_right(cv::Rect(0, 0, 128, 20)))[0], 0.05);  // 20 px away
+  VelocityFilterOptions bad;
+  bad.direction = Eigen::Vector2d::Zero();
+  EXPECT_THROW(VelocityFilter{bad}, Error);
+  bad = {};
+  bad.max_angle_deg = 0.0;
+  EXPECT_THROW(VelocityFilter{bad}, Error);
+}
+
 TEST(InterestFilterBank, ChainedFromItsFileAndErrorsNameTheFilter) {
   InterestFilterBank bank = ParseInterestFilterBank(R"(
 filters:
@@ -102,6 +133,12 @@ filters:
   ASSERT_EQ(bank.size(), 2);
   EXPECT_EQ(bank.filter(0).name(), "motion");
   EXPECT_EQ(bank.filter(1).name(), "colour");
+  EXPECT_EQ(ParseInterestFilterBank(
+                "filters:\n  - type: velocity\n    direction: [0, -1]\n    min_speed_px: 1\n",
+                "bank.yaml")
+                .filter(0)
+                .name(),
+            "velocity");
   for (int i = 0; i < 10; ++i) bank.Apply(Frame(SceneWithSquareAt(10)));
   EXPECT_TRUE(bank.ready());
   const cv::Mat interest = bank.Apply(Frame(SceneWithSquareAt(80)));
@@ -119,6 +156,8 @@ filters:
                 "filters[1]"},
            Case{"filters:\n  - type: position\n    min_m: [0, 0]\n    max_m: [1, 1, 1]\n",
                 "[x, y, z]"},
+           Case{"filters:\n  - type: velocity\n    direction: [1, 0, 0]\n", "[x, y]"},
+           Case{"filters:\n  - type: velocity\n    max_angle_deg: 200\n", "max_angle_deg"},
            Case{"filter: []\n", "'filters' list"},
            Case{"filters: [\n", "malformed"},
        }) {
