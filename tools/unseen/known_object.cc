@@ -5,6 +5,7 @@
 #include "unseen/select/interest_filter_bank.h"
 #include "unseen/select/motion_segmentation.h"
 #include "unseen/select/region_selection.h"
+#include "unseen/system/system.h"
 #include "unseen/util/error.h"
 #include "unseen/util/logging.h"
 
@@ -36,14 +37,11 @@ KnownObjectStart FindKnownObject(const Sequence& sequence, int first_frame, cons
   } else {
     bank = LoadInterestFilterBank(filters);
   }
-  // Regions of one motion each (block-based, SPEC 4.2); the background model flags mostly
-  // their edges, so a region's share and mean of interest are low even when it is the
-  // object.
+  // Regions of one motion each (block-based, SPEC 4.2), selected as `unseen run` selects
+  // them (SystemOptions: motion regions hold the whole object while the background model
+  // flags mostly its edges).
   MotionSegmenter segmenter;
-  RegionSelectionOptions selection;
-  selection.rank_by_total_interest = true;
-  selection.min_interest_share = 0.05;
-  selection.min_mean_interest = 0.05;
+  const RegionSelectionOptions selection = SystemOptions().selection;
   int tried = 0;
   for (int i = 0; i < sequence.num_frames(); ++i) {
     Frame frame = sequence.ReadFrame(i);

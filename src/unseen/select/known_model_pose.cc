@@ -81,6 +81,7 @@ KnownModelPoseResult KnownModelPoser::Find(const Frame& frame, int camera, const
   // image, or for a model without appearance the silhouette's agreement.
   const bool by_appearance =
       tracker_.given_model().HasAppearance() && tracker_.options().photometric.enabled;
+  const RigCamera& rig_camera = tracker_.rig().cameras[camera];
   double best_fit = -1.0;
   for (int i = 0; i < static_cast<int>(starts.size()); ++i) {
     tracker_.Initialize(starts[i]);
@@ -88,7 +89,6 @@ KnownModelPoseResult KnownModelPoser::Find(const Frame& frame, int camera, const
     ++result.candidates_aligned;
     const double fit = by_appearance ? tracked.summary.share
                                      : std::max(0.0, tracked.summary.region_counts.Agreement());
-    const RigCamera& rig_camera = tracker_.rig().cameras[camera];
     const double box_iou =
         BoxIou(box, SilhouetteBox(tracker_.given_model(), rig_camera.intrinsics,
                                   rig_camera.cam_from_world() * tracked.world_from_obj));

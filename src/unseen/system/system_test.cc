@@ -48,7 +48,9 @@ TEST(System, FindsTracksLosesAndFindsAgainAKnownObject) {
   for (int t = 0; t < 30; ++t) {
     const SystemStep step =
         system.Step(FrameOf(testing::RenderOverBackground(cube, camera, CubeAt(t), background), t));
-    if (t < 7) EXPECT_EQ(step.status, SystemStatus::kLearning) << "frame " << t;
+    if (t < 7) {
+      EXPECT_EQ(step.status, SystemStatus::kLearning) << "frame " << t;
+    }
     if (step.status == SystemStatus::kTracking) {
       if (first_tracked < 0) first_tracked = t;
       ASSERT_TRUE(step.track.has_value());
