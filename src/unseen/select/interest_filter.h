@@ -9,6 +9,9 @@
 //  * MotionFilter: moving pixels, by OpenCV's adaptive background model (MOG2);
 //  * PositionFilter: pixels whose 3-D point (from the depth image) lies in a box;
 //  * VelocityFilter: pixels moving along a given image direction (dense optical flow).
+// In files of their own: CooccurrenceFilter (cooccurrence_filter.h), windows like a
+// reference region by colour co-occurrence; RecognitionFilter (recognition_filter.h), the
+// detections of an object recogniser.
 #pragma once
 
 #include <Eigen/Core>

@@ -18,8 +18,18 @@
 //     - type: position        # a world-frame box, metres
 //       min_m: [-0.3, -0.3, 0.4]
 //       max_m: [0.3, 0.3, 1.2]
+//     - type: cooccurrence    # colour co-occurrence histogram (cooccurrence_filter.h)
+//       reference_image: object.png   # required
+//       reference_rect: [40, 30, 120, 90]  # x, y, width, height px; default: whole image
+//       colours: 12           # and the other CooccurrenceFilterOptions fields
+//     - type: recognition     # ORB + homography (recognition_filter.h)
+//       reference_images: [front.png, side.png]  # required
+//       reference_rects: [[0, 0, 200, 150], [10, 10, 80, 60]]  # optional, one per image
+//       min_inliers: 12       # and the other FeatureRecognizerOptions fields
 //
-// Any other InterestFilter (a recogniser, say) is added with Add().
+// Image paths are taken as given, or, when relative and the bank is loaded from a file
+// (or given a folder), from that file's folder. Any other InterestFilter (another
+// recogniser, say) is added with Add().
 #pragma once
 
 #include <memory>
@@ -47,8 +57,11 @@ class InterestFilterBank {
 };
 
 // The bank a YAML text describes (see above). Errors name `what`, the filter's index, the
-// key and the value: unknown types and keys, values of the wrong type, invalid options.
-InterestFilterBank ParseInterestFilterBank(const std::string& yaml_text, const std::string& what);
+// key and the value: unknown types and keys, values of the wrong type, invalid options,
+// reference images that cannot be read. Relative image paths are resolved against
+// `base_folder` unless it is empty.
+InterestFilterBank ParseInterestFilterBank(const std::string& yaml_text, const std::string& what,
+                                           const std::string& base_folder = "");
 InterestFilterBank LoadInterestFilterBank(const std::string& path);
 
 }  // namespace unseen
