@@ -5,12 +5,15 @@
 // background, select the object, model it (or use --model), track it, and search again
 // when it is lost. Writes the pose stream in the system's own object frame (score it with
 // `unseen eval --align-first`) and prints the statuses, the speed and, when the source has
-// ground truth, the error after aligning the first tracked pose.
+// ground truth, the error after aligning the first tracked pose. --config takes the whole
+// system's YAML (system/system_config.h); the command line's options override it.
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <opencv2/highgui.hpp>
 #include <string>
 #include <vector>
 
@@ -22,6 +25,8 @@
 #include "unseen/mesh/mesh_io.h"
 #include "unseen/system/frame_source.h"
 #include "unseen/system/system.h"
+#include "unseen/system/system_config.h"
+#include "unseen/system/system_overlay.h"
 #include "unseen/util/error.h"
 #include "unseen/util/logging.h"
 #include "unseen/util/timer.h"
@@ -37,15 +42,18 @@ struct RunArgs {
   std::string calibration;
   std::string model;
   std::string model_units = "mm";
+  std::string config;  // system.yaml
+  // Overrides of the configuration (empty / 0: as configured).
   std::string filters;
-  std::string regions = "motion";
-  std::string config;        // tracker options
+  std::string regions;
+  std::string tracker_config;
   UnknownObjectArgs object;  // --depth, --model-config
-  std::string update = "incremental";
+  std::string update;
+  int reselect_after = 0;
   std::string out;
   std::string overlay;
+  bool show = false;
   int max_frames = 0;
-  int reselect_after = 10;
 };
 
 bool IsSequenceFolder(const fs::path& p) {
@@ -87,22 +95,25 @@ void RunSystem(const RunArgs& args) {
   std::optional<Mesh> model;
   if (!args.model.empty()) model = LoadMesh(args.model, args.model_units == "mm" ? 0.001 : 1.0);
 
-  SystemOptions options;
-  UNSEEN_CHECK(args.regions == "motion" || args.regions == "interest",
-               "run: --regions '{}' must be motion or interest", args.regions);
-  options.regions = args.regions == "motion" ? RegionSource::kMotion : RegionSource::kInterest;
-  options.reselect_after_lost_frames = args.reselect_after;
-  try {
-    options.update.mode = ParseModelUpdateMode(args.update);
-  } catch (const Error& e) {
-    ThrowError("run: --update: {}", e.what());
+  SystemConfig config = args.config.empty() ? SystemConfig() : LoadSystemConfig(args.config);
+  SystemOptions& options = config.system;
+  if (!args.regions.empty()) options.regions = ParseRegionSource(args.regions, "run: --regions");
+  if (args.reselect_after > 0) options.reselect_after_lost_frames = args.reselect_after;
+  if (!args.update.empty()) {
+    try {
+      options.update.mode = ParseModelUpdateMode(args.update);
+    } catch (const Error& e) {
+      ThrowError("run: --update: {}", e.what());
+    }
   }
+  options.Check();
   TrackerOptions tracker_options =
-      args.config.empty() ? TrackerOptions() : LoadTrackerOptions(args.config);
+      args.tracker_config.empty() ? config.tracker : LoadTrackerOptions(args.tracker_config);
   if (source->fps() > 0) tracker_options.frame_interval_s = 1.0 / source->fps();
-  ModellerOptions modeller_options;
+  ModellerOptions modeller_options = config.modeller.value_or(ModellerOptions());
   if (!model) {
-    if (sequence != nullptr) {
+    if (sequence != nullptr &&
+        (!config.modeller || !args.object.depth.empty() || !args.object.model_config.empty())) {
       modeller_options = ModellerOptionsFor(args.object, *sequence, "run");
     } else if (!args.object.model_config.empty()) {
       modeller_options = LoadModellerOptions(args.object.model_config, modeller_options);
@@ -115,14 +126,29 @@ void RunSystem(const RunArgs& args) {
                  source->name(), source->rig().size());
   }
   InterestFilterBank bank;
-  if (args.filters.empty()) {
-    bank.Add(std::make_unique<MotionFilter>(MotionFilterOptions()));
-  } else {
+  if (!args.filters.empty()) {
     bank = LoadInterestFilterBank(args.filters);
+  } else if (config.filters) {
+    bank = std::move(*config.filters);
+  } else {
+    bank.Add(std::make_unique<MotionFilter>(MotionFilterOptions()));
   }
-  System system(source->rig(), source->reference_camera(), std::move(model), std::move(bank),
-                options, tracker_options, modeller_options);
+  const int reference = source->reference_camera();
+  const RigCamera reference_camera = source->rig().cameras[reference];
+  System system(source->rig(), reference, std::move(model), std::move(bank), options,
+                tracker_options, modeller_options);
 
+  // The overlay, drawn as the frames come: to a file and/or an on-screen window.
+  std::unique_ptr<OverlaySink> overlay;
+  const char* kWindow = "unseen run";
+  if (args.show) {
+    const char* display = std::getenv("DISPLAY");
+    const char* wayland = std::getenv("WAYLAND_DISPLAY");
+    UNSEEN_CHECK((display != nullptr && *display) || (wayland != nullptr && *wayland),
+                 "run: --show needs a display (DISPLAY is not set); write the overlay with "
+                 "--overlay FILE instead");
+    cv::namedWindow(kWindow, cv::WINDOW_AUTOSIZE);
+  }
   std::unique_ptr<PoseStreamWriter> writer;
   if (!args.out.empty()) writer = std::make_unique<PoseStreamWriter>(args.out);
   std::vector<PoseRecord> records;
@@ -148,6 +174,27 @@ void RunSystem(const RunArgs& args) {
     ++statuses[step.status];
     if (!step.note.empty()) {
       UNSEEN_LOG_INFO("run: frame {}: {}: {}", frame->frame_id, ToString(step.status), step.note);
+    }
+    if (!args.overlay.empty() || args.show) {
+      cv::Mat image = frame->images[reference].empty()
+                          ? cv::Mat(reference_camera.intrinsics.height,
+                                    reference_camera.intrinsics.width, CV_8UC3, cv::Scalar::all(0))
+                          : frame->images[reference].clone();
+      const Mesh* drawn = system.tracker() != nullptr ? &system.tracker()->model() : nullptr;
+      DrawSystemOverlay(step, drawn, reference_camera.intrinsics, reference_camera.cam_from_world(),
+                        SystemOverlayOptions(), &image);
+      if (!args.overlay.empty()) {
+        if (!overlay) {
+          overlay = std::make_unique<OverlaySink>(
+              args.overlay, source->fps() > 0 ? source->fps() : 30.0, image.size());
+        }
+        overlay->Write(image, frame->frame_id);
+      }
+      if (args.show) {
+        cv::imshow(kWindow, image);
+        const int key = cv::waitKey(1);
+        if (key == 'q' || key == 27) break;  // q or Esc ends the run
+      }
     }
     const std::optional<Rigid3d> truth =
         sequence != nullptr ? sequence->GroundTruth(frames - 1) : std::nullopt;
@@ -183,12 +230,6 @@ void RunSystem(const RunArgs& args) {
         within, with_truth, 100.0 * within / with_truth, scored ? sum_t_mm / scored : 0.0,
         scored ? sum_r_deg / scored : 0.0, scored);
   }
-  if (!args.overlay.empty()) {
-    UNSEEN_CHECK(sequence != nullptr,
-                 "run: --overlay needs a sequence, image folder or video "
-                 "source read as a sequence");
-    WriteOverlay(*sequence, records, sequence->reference_camera(), args.overlay);
-  }
 }
 
 void AddRunCommand(CLI::App& app) {
@@ -203,11 +244,15 @@ void AddRunCommand(CLI::App& app) {
                   "Camera calibration (OpenCV YAML/XML/JSON or ROS camera_info)");
   cmd->add_option("--model", args->model, "The object's model; without it, modelled on-line");
   cmd->add_option("--model-units", args->model_units, "Units of --model: mm (BOP) or m");
-  cmd->add_option("--filters", args->filters, "Interest filter bank (YAML; default: motion)");
+  cmd->add_option("--config", args->config,
+                  "The system's configuration (YAML: filters, regions, selection, tracker, "
+                  "...; configs/system/)");
+  cmd->add_option("--filters", args->filters,
+                  "Interest filter bank (YAML; default: the configuration's, else motion)");
   cmd->add_option("--regions", args->regions,
                   "Candidate regions: motion (segmentation; default) or interest (the "
                   "interest map's parts, e.g. with a position filter)");
-  cmd->add_option("--config", args->config, "Tracker options (YAML)");
+  cmd->add_option("--tracker-config", args->tracker_config, "Tracker options (YAML)");
   cmd->add_option("--depth", args->object.depth,
                   "No --model: depth source planesweep, stereo or sensor");
   cmd->add_option("--model-config", args->object.model_config, "No --model: modeller options");
@@ -215,7 +260,9 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_option("--reselect-after", args->reselect_after,
                   "Frames lost in a row before the object is searched for again");
   cmd->add_option("--out", args->out, "Pose stream to write (.csv or .jsonl)");
-  cmd->add_option("--overlay", args->overlay, "Overlay video (.mp4/.avi) or PNG folder");
+  cmd->add_option("--overlay", args->overlay,
+                  "Overlay video (.mp4/.avi) or PNG folder: interest, regions, model, status");
+  cmd->add_flag("--show", args->show, "Show the overlay in a window (q or Esc stops)");
   cmd->add_option("--max-frames", args->max_frames, "Process at most N frames");
   cmd->callback([args] { RunSystem(*args); });
 }

@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
@@ -101,6 +103,44 @@ TEST_F(RunCli, AVideoFileGoesThroughTheCamerasPath) {
   fs::remove(video);
   fs::remove(calibration);
   fs::remove(poses);
+}
+
+// The whole system's configuration file and the overlay: one drawn frame per input frame,
+// the model's outline in green once tracking; a configuration in error names its file.
+TEST_F(RunCli, TakesASystemConfigurationAndDrawsTheOverlay) {
+  const std::string config = TempPath("system.yaml"), overlay = TempPath("overlay");
+  {
+    std::ofstream out(config);
+    out << "system: {regions: motion, reselect_after_lost_frames: 5}\n"
+           "filters: [{type: motion, warmup_frames: 6}]\n"
+           "known_pose: {max_candidates: 8}\n";
+  }
+  fs::remove_all(overlay);
+  const testing::CliResult r = ::unseen::RunCli(fmt::format(
+      "run '{}' --model '{}' --config '{}' --overlay '{}'", dir_, model_, config, overlay));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("frames: learning 5"), std::string::npos) << r.out;  // warmup 6
+  int drawn = 0;
+  for (const auto& entry : fs::directory_iterator(overlay))
+    drawn += entry.path().extension() == ".png";
+  EXPECT_EQ(drawn, 40);
+  cv::Mat last = cv::imread((fs::path(overlay) / "frame_000039.png").string());
+  ASSERT_FALSE(last.empty());
+  cv::Mat green;
+  cv::inRange(last, cv::Scalar(0, 200, 0), cv::Scalar(60, 255, 60), green);
+  EXPECT_GT(cv::countNonZero(green), 100);
+
+  {
+    std::ofstream out(config);
+    out << "system: {regions: everywhere}\n";
+  }
+  const testing::CliResult bad =
+      ::unseen::RunCli(fmt::format("run '{}' --model '{}' --config '{}'", dir_, model_, config));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("system.yaml"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("everywhere"), std::string::npos) << bad.err;
+  fs::remove_all(overlay);
+  fs::remove(config);
 }
 
 }  // namespace

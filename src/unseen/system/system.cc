@@ -153,6 +153,9 @@ SystemStep System::Step(const Frame& frame) {
       SelectRegion(labels, step.interest, cv::Mat(), depth, rig_.cameras[reference_].intrinsics,
                    options_.selection);
   step.status = SystemStatus::kNoObject;
+  for (const RegionCandidate& r : selection.regions) {
+    if (r.candidate) step.candidates.push_back(r.box);
+  }
   if (!selection.found()) return step;
   const RegionCandidate& region = selection.object();
   step.region = region.box;

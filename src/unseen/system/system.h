@@ -14,6 +14,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "unseen/camera/camera.h"
 #include "unseen/io/sequence.h"
@@ -63,6 +64,7 @@ struct SystemStep {
   SystemStatus status = SystemStatus::kLearning;
   std::optional<TrackResult> track;  // the tracker's result, when it ran this frame
   PixelRect region;                  // the selected region, when one was (reference image)
+  std::vector<PixelRect> candidates;  // boxes of the candidate regions, when selection ran
   cv::Mat interest;                  // the reference camera's interest map (CV_32FC1)
   std::string note;                  // what happened, for the log ("found ...", "model ...")
 };

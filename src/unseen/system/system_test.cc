@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "unseen/mesh/primitives.h"
+#include "unseen/system/system_overlay.h"
 #include "unseen/track/test_scene.h"
 #include "unseen/util/error.h"
 
@@ -52,7 +53,13 @@ TEST(System, FindsTracksLosesAndFindsAgainAKnownObject) {
       EXPECT_EQ(step.status, SystemStatus::kLearning) << "frame " << t;
     }
     if (step.status == SystemStatus::kTracking) {
-      if (first_tracked < 0) first_tracked = t;
+      if (first_tracked < 0) {
+        first_tracked = t;
+        // The frame it was found in: the selected region is one of the candidates.
+        EXPECT_FALSE(step.region.empty());
+        EXPECT_NE(std::find(step.candidates.begin(), step.candidates.end(), step.region),
+                  step.candidates.end());
+      }
       ASSERT_TRUE(step.track.has_value());
       EXPECT_LT(Difference(step.track->world_from_obj, CubeAt(t)).translation, 0.005)
           << "frame " << t;
@@ -114,6 +121,52 @@ TEST(System, RejectsWrongInput) {
   Frame none;
   none.images = {cv::Mat()};
   EXPECT_EQ(system.Step(none).status, SystemStatus::kNoObject);  // a dropped frame
+}
+
+// The overlay shows the interest (red tint), the selected region (cyan), the model's outline
+// at the tracked pose (green) and leaves the rest of the image alone.
+TEST(SystemOverlay, DrawsInterestRegionsModelAndStatus) {
+  const Mesh cube = MakeLetteredCube(0.096, 16);
+  const Rig rig = testing::OneCameraRig();
+  const RigCamera& camera = rig.cameras[0];
+  const cv::Mat grey(camera.intrinsics.height, camera.intrinsics.width, CV_32FC3,
+                     cv::Scalar::all(0.5));
+  SystemStep step;
+  step.frame_id = 3;
+  step.status = SystemStatus::kTracking;
+  step.interest = cv::Mat::zeros(grey.size(), CV_32FC1);
+  step.interest(cv::Rect(20, 200, 40, 40)).setTo(1.0f);
+  step.region = PixelRect{300, 50, 400, 150};
+  step.candidates = {step.region, PixelRect{20, 150, 60, 190}};
+  TrackResult track;
+  track.world_from_obj = CubeAt(0);
+  track.confidence = 0.9;
+  step.track = track;
+  cv::Mat image = grey.clone();
+  DrawSystemOverlay(step, &cube, camera.intrinsics, camera.cam_from_world(), SystemOverlayOptions(),
+                    &image);
+  ASSERT_EQ(image.type(), CV_8UC3);
+  const cv::Vec3b tinted = image.at<cv::Vec3b>(220, 40);
+  const cv::Vec3b plain = image.at<cv::Vec3b>(image.rows - 10, image.cols - 10);
+  EXPECT_GT(tinted[2], plain[2] + 50);
+  EXPECT_LT(tinted[1], plain[1] - 50);
+  EXPECT_EQ(image.at<cv::Vec3b>(100, 300), cv::Vec3b(255, 255, 0));  // the selected box
+  // The outline: green pixels around the cube's projected centre, none far from it.
+  const Eigen::Vector2d centre =
+      camera.intrinsics.Project(camera.cam_from_world() * CubeAt(0).translation());
+  cv::Mat green;
+  cv::inRange(image, cv::Scalar(0, 200, 0), cv::Scalar(60, 255, 60), green);
+  const cv::Rect near(static_cast<int>(centre.x()) - 120, static_cast<int>(centre.y()) - 120, 240,
+                      240);
+  const int all_green = cv::countNonZero(green);
+  EXPECT_GT(all_green, 100);
+  EXPECT_EQ(cv::countNonZero(green(near & cv::Rect(0, 0, image.cols, image.rows))), all_green);
+
+  SystemOverlayOptions bad;
+  bad.interest_alpha = 2.0;
+  EXPECT_THROW(
+      DrawSystemOverlay(step, &cube, camera.intrinsics, camera.cam_from_world(), bad, &image),
+      Error);
 }
 
 }  // namespace
