@@ -65,8 +65,8 @@ Mesh ModelUpdater::Start(const ModelBuild& first) {
 }
 
 ModelBuild ModelUpdater::BuildAndFuse(const Frame& frame, const Rigid3d& world_from_obj,
-                                      const Mesh& current) {
-  ModelBuild build = modeller_.Build(frame, world_from_obj, PixelRect(), cv::Mat(), &current);
+                                      const Mesh& current, const cv::Mat& mask) {
+  ModelBuild build = modeller_.Build(frame, world_from_obj, PixelRect(), mask, &current);
   if (!build.ok() || !fusion_) return build;
   Timer timer;
   std::string why;
@@ -98,7 +98,8 @@ std::optional<Mesh> ModelUpdater::Collect(ModelBuild build) {
 }
 
 std::optional<Mesh> ModelUpdater::AfterFrame(const Frame& frame, const Rigid3d& world_from_obj,
-                                             double confidence, const Mesh& current) {
+                                             double confidence, const Mesh& current,
+                                             const cv::Mat& mask) {
   ++frames_since_model_;
   std::optional<Mesh> ready;
   if (pending_.valid() && pending_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
@@ -111,20 +112,21 @@ std::optional<Mesh> ModelUpdater::AfterFrame(const Frame& frame, const Rigid3d& 
   ++stats_.started;
   frames_since_model_ = 0;  // the next attempt after every_frames more, built or not
   if (!options_.asynchronous) {
-    return Collect(BuildAndFuse(frame, world_from_obj, current));
+    return Collect(BuildAndFuse(frame, world_from_obj, current, mask));
   }
   // The frame's images are shared, not copied: nothing writes to a frame once read. The
   // model in use is copied (the tracker may swap it meanwhile).
-  pending_ = std::async(std::launch::async, [this, frame, world_from_obj, model = current] {
-    return BuildAndFuse(frame, world_from_obj, model);
+  pending_ = std::async(std::launch::async, [this, frame, world_from_obj, model = current, mask] {
+    return BuildAndFuse(frame, world_from_obj, model, mask);
   });
   return ready;
 }
 
-bool ModelUpdater::AfterTracked(const Frame& frame, const TrackResult& result, Tracker* tracker) {
+bool ModelUpdater::AfterTracked(const Frame& frame, const TrackResult& result, Tracker* tracker,
+                                const cv::Mat& mask) {
   if (result.status != TrackStatus::kTracking) return false;
   std::optional<Mesh> next =
-      AfterFrame(frame, result.world_from_obj, result.confidence, tracker->given_model());
+      AfterFrame(frame, result.world_from_obj, result.confidence, tracker->given_model(), mask);
   if (!next) return false;
   tracker->SetModel(std::move(*next));
   return true;

@@ -63,14 +63,18 @@ class ModelUpdater {
   // of this frame when one is due. A build that cannot model the frame is counted and
   // dropped (the model in use stays).
   // `current`: the model in use (ModellerOptions::align_to_current aligns the new surface
-  // to it).
+  // to it). `mask` (optional, CV_8UC1 of the reference camera's size): where the object
+  // may be in this frame (e.g. the pixels moving with it, select/interest_filter.h's
+  // TrackedMotionFilter), handed to Modeller::Build.
   std::optional<Mesh> AfterFrame(const Frame& frame, const Rigid3d& world_from_obj,
-                                 double confidence, const Mesh& current);
+                                 double confidence, const Mesh& current,
+                                 const cv::Mat& mask = cv::Mat());
 
   // AfterFrame for the frame `tracker` just tracked (`result`), when it tracked it: a model
   // that is ready replaces the tracker's (Tracker::SetModel) at this frame boundary. True
   // when it did.
-  bool AfterTracked(const Frame& frame, const TrackResult& result, Tracker* tracker);
+  bool AfterTracked(const Frame& frame, const TrackResult& result, Tracker* tracker,
+                    const cv::Mat& mask = cv::Mat());
 
   const ModelUpdateStats& stats() const { return stats_; }
 
@@ -78,7 +82,8 @@ class ModelUpdater {
   std::optional<Mesh> Collect(ModelBuild build);
   // Modeller::Build, then with kIncremental the fusion of its depth (on the build's thread:
   // only one build runs at a time).
-  ModelBuild BuildAndFuse(const Frame& frame, const Rigid3d& world_from_obj, const Mesh& current);
+  ModelBuild BuildAndFuse(const Frame& frame, const Rigid3d& world_from_obj, const Mesh& current,
+                          const cv::Mat& mask);
 
   const Modeller& modeller_;
   ModelUpdateOptions options_;

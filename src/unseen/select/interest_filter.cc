@@ -19,6 +19,18 @@ void CheckInputs(const std::string& filter, const FilterFrame& frame, const cv::
                frame.image.cols, frame.image.rows);
 }
 
+// The frame's image in 8-bit grey levels (what DIS flow takes).
+cv::Mat Grey8(const FilterFrame& frame) {
+  cv::Mat grey_float, grey;
+  cv::cvtColor(frame.image, grey_float, cv::COLOR_BGR2GRAY);
+  grey_float.convertTo(grey, CV_8U, 255.0);
+  return grey;
+}
+
+cv::Ptr<cv::DISOpticalFlow> FastDis() {
+  return cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_FAST);
+}
+
 }  // namespace
 
 void ColourFilterOptions::Check() const {
@@ -152,14 +164,11 @@ void VelocityFilterOptions::Check() const {
 }
 
 VelocityFilter::VelocityFilter(const VelocityFilterOptions& options)
-    : options_((options.Check(), options)),
-      flow_(cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_FAST)) {}
+    : options_((options.Check(), options)), flow_(FastDis()) {}
 
 void VelocityFilter::Apply(const FilterFrame& frame, cv::Mat* interest) {
   CheckInputs(name(), frame, *interest);
-  cv::Mat grey_float, grey;
-  cv::cvtColor(frame.image, grey_float, cv::COLOR_BGR2GRAY);
-  grey_float.convertTo(grey, CV_8U, 255.0);
+  const cv::Mat grey = Grey8(frame);
   UNSEEN_CHECK(previous_.empty() || previous_.size() == grey.size(),
                "velocity filter: the image is {}x{}; the previous one was {}x{}", grey.cols,
                grey.rows, previous_.cols, previous_.rows);
@@ -188,6 +197,74 @@ void VelocityFilter::Apply(const FilterFrame& frame, cv::Mat* interest) {
       const float cosine = (f[x][0] * d.x() + f[x][1] * d.y()) / speed;
       const float along = cos_max < 1.0f ? (cosine - cos_max) / (1.0f - cos_max) : 0.0f;
       s[x] *= std::clamp(along, 0.0f, 1.0f);
+    }
+  }
+}
+
+void TrackedMotionFilterOptions::Check() const {
+  UNSEEN_CHECK(max_difference_px > 0.0, "tracked motion filter: max_difference_px {} must be > 0",
+               max_difference_px);
+  UNSEEN_CHECK(relative_difference >= 0.0,
+               "tracked motion filter: relative_difference {} must be >= 0", relative_difference);
+  UNSEEN_CHECK(min_object_speed_px >= 0.0,
+               "tracked motion filter: min_object_speed_px {} must be >= 0", min_object_speed_px);
+}
+
+TrackedMotionFilter::TrackedMotionFilter(const TrackedMotionFilterOptions& options)
+    : options_((options.Check(), options)), flow_(FastDis()) {}
+
+void TrackedMotionFilter::Apply(const FilterFrame& frame, cv::Mat* interest) {
+  CheckInputs(name(), frame, *interest);
+  UNSEEN_CHECK(frame.depth.empty() ||
+                   (frame.depth.type() == CV_32FC1 && frame.depth.size() == frame.image.size()),
+               "tracked motion filter: the depth map must be CV_32FC1 of the image's size");
+  const cv::Mat grey = Grey8(frame);
+  const cv::Mat previous = previous_;
+  previous_ = grey;
+  if (previous.empty() || previous.size() != grey.size() || !frame.world_from_obj ||
+      !frame.previous_world_from_obj) {
+    return;  // nothing to compare with: no judgement
+  }
+  // Camera-frame points of this frame to the previous frame: the object's motion seen
+  // from the camera, inverted.
+  const Rigid3d cam_from_world = frame.world_from_cam.Inverse();
+  const Rigid3d previous_from_current = cam_from_world * *frame.previous_world_from_obj *
+                                        frame.world_from_obj->Inverse() * frame.world_from_cam;
+  const Eigen::Matrix3f rotation = previous_from_current.RotationMatrix().cast<float>();
+  const Eigen::Vector3f translation = previous_from_current.translation().cast<float>();
+  const PinholeCamera& camera = frame.camera;
+  const Eigen::Vector3d origin = cam_from_world * frame.world_from_obj->translation();
+  if (origin.z() <= 1e-6) return;  // behind the camera
+  const Eigen::Vector2d origin_px = camera.Project(origin);
+  const Eigen::Vector2d origin_before = camera.Project(
+      previous_from_current.RotationMatrix() * origin + previous_from_current.translation());
+  if ((origin_before - origin_px).norm() < options_.min_object_speed_px) return;
+
+  cv::Mat flow;
+  flow_->calc(grey, previous, flow);  // at this frame's pixels, towards the previous frame
+  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
+  const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
+  const float origin_depth = static_cast<float>(origin.z());
+  const float base = static_cast<float>(options_.max_difference_px);
+  const float relative = static_cast<float>(options_.relative_difference);
+  for (int y = 0; y < flow.rows; ++y) {
+    const cv::Vec2f* f = flow.ptr<cv::Vec2f>(y);
+    const float* depth = frame.depth.empty() ? nullptr : frame.depth.ptr<float>(y);
+    float* s = interest->ptr<float>(y);
+    for (int x = 0; x < flow.cols; ++x) {
+      if (s[x] <= 0.0f) continue;  // (2.4)
+      const float z = depth != nullptr && depth[x] > 0.0f ? depth[x] : origin_depth;
+      const Eigen::Vector3f point(z * (x - cx) / fx, z * (y - cy) / fy, z);
+      const Eigen::Vector3f before = rotation * point + translation;
+      if (before.z() <= 1e-6f) {
+        s[x] = 0.0f;
+        continue;
+      }
+      const float px = fx * before.x() / before.z() + cx - x;
+      const float py = fy * before.y() / before.z() + cy - y;
+      const float tolerance = base + relative * std::hypot(px, py);
+      const float difference = std::hypot(f[x][0] - px, f[x][1] - py);
+      s[x] *= std::clamp(1.0f - difference / tolerance, 0.0f, 1.0f);
     }
   }
 }

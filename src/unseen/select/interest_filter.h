@@ -8,7 +8,8 @@
 //  * ColourFilter (2.5): closeness to one of a few reference colours;
 //  * MotionFilter: moving pixels, by OpenCV's adaptive background model (MOG2);
 //  * PositionFilter: pixels whose 3-D point (from the depth image) lies in a box;
-//  * VelocityFilter: pixels moving along a given image direction (dense optical flow).
+//  * VelocityFilter: pixels moving along a given image direction (dense optical flow);
+//  * TrackedMotionFilter: pixels moving as the tracked object does (for model rebuilds).
 // In files of their own: CooccurrenceFilter (cooccurrence_filter.h), windows like a
 // reference region by colour co-occurrence; RecognitionFilter (recognition_filter.h), the
 // detections of an object recogniser.
@@ -19,6 +20,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/video/background_segm.hpp>
 #include <opencv2/video/tracking.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,6 +36,9 @@ struct FilterFrame {
   PinholeCamera camera;    // of `image`
   Rigid3d world_from_cam;  // where the camera is
   double time_s = 0.0;
+  // The tracked object, when there is one: its pose in this frame and in the previous one
+  // (for the filters that follow it).
+  std::optional<Rigid3d> world_from_obj, previous_world_from_obj;
 };
 
 class InterestFilter {
@@ -145,6 +150,39 @@ class VelocityFilter : public InterestFilter {
   cv::Ptr<cv::DISOpticalFlow> flow_;
   cv::Mat previous_;  // CV_8UC1 grey
   bool ready_ = false;
+};
+
+// ---- moving with the tracked object --------------------------------------------------
+
+struct TrackedMotionFilterOptions {
+  // A pixel moves with the object when its measured flow (to the previous frame) differs
+  // from the flow the object's tracked motion predicts there by less than
+  // max_difference_px + relative_difference * |predicted|; interest falls linearly from 1
+  // (equal) to 0 at that distance.
+  double max_difference_px = 1.0;
+  double relative_difference = 0.3;
+  // Below this predicted speed at the object's origin (px/frame) the object hardly moves
+  // in the image and motion cannot tell it from what stands still: interest is left as is.
+  double min_object_speed_px = 0.5;
+  void Check() const;
+};
+
+// The velocity IF of SPEC 4.1 for model rebuilds: interest where the image moves under
+// the same rigid motion as the tracked object (FilterFrame::world_from_obj and
+// previous_world_from_obj). The predicted flow of a pixel takes its depth from the frame's
+// depth map where measured, else the object origin's depth; the measured flow is OpenCV's
+// DIS from this frame to the previous one. Without a tracked object (or before its second
+// frame) it judges nothing and leaves interest as it is.
+class TrackedMotionFilter : public InterestFilter {
+ public:
+  explicit TrackedMotionFilter(const TrackedMotionFilterOptions& options);
+  std::string name() const override { return "tracked_motion"; }
+  void Apply(const FilterFrame& frame, cv::Mat* interest) override;
+
+ private:
+  TrackedMotionFilterOptions options_;
+  cv::Ptr<cv::DISOpticalFlow> flow_;
+  cv::Mat previous_;  // CV_8UC1 grey
 };
 
 }  // namespace unseen

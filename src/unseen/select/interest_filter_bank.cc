@@ -38,7 +38,8 @@ YamlSetter Ignore() {
   return [](const YAML::Node&, const std::string&) {};
 }
 
-constexpr const char* kTypes = "colour, motion, velocity, position, cooccurrence, recognition";
+constexpr const char* kTypes =
+    "colour, motion, velocity, tracked_motion, position, cooccurrence, recognition";
 
 // `path` as given, or under `base_folder` when it is relative and the folder is known.
 std::string ResolvePath(const std::string& path, const std::string& base_folder) {
@@ -166,6 +167,15 @@ std::unique_ptr<InterestFilter> MakeFilter(const YAML::Node& node, const std::st
       UNSEEN_CHECK(direction.size() == 2, "{}: direction must be [x, y]", where);
       o.direction = Eigen::Vector2d(direction[0], direction[1]);
       return std::make_unique<VelocityFilter>(o);
+    }
+    if (type == "tracked_motion") {
+      TrackedMotionFilterOptions o;
+      ApplyYamlSection(node, where,
+                       {{"type", Ignore()},
+                        {"max_difference_px", YamlField(&o.max_difference_px)},
+                        {"relative_difference", YamlField(&o.relative_difference)},
+                        {"min_object_speed_px", YamlField(&o.min_object_speed_px)}});
+      return std::make_unique<TrackedMotionFilter>(o);
     }
     if (type == "position") {
       std::vector<double> lo, hi;

@@ -15,6 +15,10 @@
 //       direction: [1, 0]
 //       min_speed_px: 0.5
 //       max_angle_deg: 45
+//     - type: tracked_motion  # moving with the tracked object (model rebuilds)
+//       max_difference_px: 1.0
+//       relative_difference: 0.3
+//       min_object_speed_px: 0.5
 //     - type: position        # a world-frame box, metres
 //       min_m: [-0.3, -0.3, 0.4]
 //       max_m: [0.3, 0.3, 1.2]

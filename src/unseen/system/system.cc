@@ -3,6 +3,9 @@
 
 #include <fmt/format.h>
 
+#include <opencv2/imgproc.hpp>
+
+#include "unseen/render/rasterizer.h"
 #include "unseen/util/error.h"
 #include "unseen/util/logging.h"
 
@@ -33,6 +36,9 @@ void SystemOptions::Check() const {
   selection.Check();
   known_pose.Check();
   update.Check();
+  tracked_motion.Check();
+  UNSEEN_CHECK(rebuild_min_interest >= 0.0 && rebuild_min_interest < 1.0,
+               "system: rebuild_min_interest {} not in [0, 1)", rebuild_min_interest);
   UNSEEN_CHECK(reselect_after_lost_frames >= 1,
                "system: reselect_after_lost_frames {} must be >= 1", reselect_after_lost_frames);
 }
@@ -46,7 +52,8 @@ System::System(const Rig& rig, int reference, std::optional<Mesh> model, Interes
       bank_(std::move(bank)),
       options_((options.Check(), options)),
       tracker_options_(tracker_options),
-      segmenter_(options.segmentation) {
+      segmenter_(options.segmentation),
+      tracked_motion_(options.tracked_motion) {
   rig_.Check();
   UNSEEN_CHECK(reference >= 0 && reference < rig_.size(),
                "system: reference camera {} not in [0, {})", reference, rig_.size());
@@ -98,6 +105,48 @@ bool System::Start(const Frame& frame, const RegionCandidate& region, const cv::
   return true;
 }
 
+cv::Mat System::MovingWithObject(const Frame& frame, const TrackResult& track) {
+  const std::optional<Rigid3d> previous = previous_tracked_;
+  const bool tracked = track.status == TrackStatus::kTracking;
+  previous_tracked_ = tracked ? std::optional<Rigid3d>(track.world_from_obj) : std::nullopt;
+  const cv::Mat& image = frame.images[reference_];
+  if (image.empty()) return cv::Mat();
+  const RigCamera& camera = rig_.cameras[reference_];
+  FilterFrame in;
+  in.image = image;
+  in.camera = camera.intrinsics;
+  in.world_from_cam = camera.world_from_cam;
+  in.time_s = frame.time_s;
+  if (tracked && previous) {
+    in.world_from_obj = track.world_from_obj;
+    in.previous_world_from_obj = *previous;
+    if (!frame.depths.empty() && !frame.depths[reference_].empty()) {
+      in.depth = frame.depths[reference_];
+    } else {
+      // No measured depth: the model's, rendered at the tracked pose (the filter takes the
+      // origin's depth elsewhere).
+      RenderBuffers render;
+      Render(tracker_->model(), camera.intrinsics, camera.cam_from_world() * track.world_from_obj,
+             camera.intrinsics.ImageRect(), RenderOptions{}, &render);
+      in.depth = cv::Mat::zeros(image.size(), CV_32FC1);
+      if (!render.roi.empty()) {
+        render.depth.copyTo(in.depth(
+            cv::Rect(render.roi.x0, render.roi.y0, render.roi.width(), render.roi.height())));
+      }
+    }
+  }
+  cv::Mat interest(image.size(), CV_32FC1, cv::Scalar(1.0f));
+  tracked_motion_.Apply(in, &interest);  // keeps this image for the next frame
+  if (!in.world_from_obj) return cv::Mat();
+  cv::Mat moving = interest > options_.rebuild_min_interest;
+  if (cv::countNonZero(moving) == static_cast<int>(moving.total())) return cv::Mat();
+  // Texture-less patches inside the object flow with their surroundings only roughly:
+  // close small gaps.
+  cv::morphologyEx(moving, moving, cv::MORPH_CLOSE,
+                   cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(9, 9)));
+  return moving;
+}
+
 SystemStep System::Step(const Frame& frame) {
   UNSEEN_CHECK(static_cast<int>(frame.images.size()) == rig_.size(),
                "system: frame {} has {} images for {} cameras", frame.frame_id, frame.images.size(),
@@ -125,7 +174,11 @@ SystemStep System::Step(const Frame& frame) {
 
   if (active_) {
     step.track = tracker_->Track(frame);
-    if (updater_) updater_->AfterTracked(frame, *step.track, tracker_.get());
+    if (updater_) {
+      const cv::Mat moving =
+          options_.rebuild_from_tracked_motion ? MovingWithObject(frame, *step.track) : cv::Mat();
+      updater_->AfterTracked(frame, *step.track, tracker_.get(), moving);
+    }
     if (step.track->status == TrackStatus::kTracking) {
       lost_frames_ = 0;
       step.status = SystemStatus::kTracking;
@@ -135,6 +188,7 @@ SystemStep System::Step(const Frame& frame) {
     if (++lost_frames_ < options_.reselect_after_lost_frames) return step;
     step.note = fmt::format("lost for {} frames: searching for the object again", lost_frames_);
     active_ = false;
+    previous_tracked_.reset();
     lost_frames_ = 0;
     return step;
   }

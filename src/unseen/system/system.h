@@ -55,6 +55,12 @@ struct SystemOptions {
   ModelUpdateOptions update;
   // The object is searched for again after this many frames lost in a row.
   int reselect_after_lost_frames = 10;
+  // An unknown object's model rebuilds take only the pixels that move with the tracked
+  // object (SPEC 5.5; select/interest_filter.h's TrackedMotionFilter, above
+  // rebuild_min_interest), where it moves enough in the image to tell.
+  bool rebuild_from_tracked_motion = true;
+  TrackedMotionFilterOptions tracked_motion;
+  double rebuild_min_interest = 0.3;
   void Check() const;
 };
 
@@ -91,6 +97,10 @@ class System {
   bool tracking() const { return active_; }
 
  private:
+  // The pixels of the reference image moving with the tracked object (CV_8UC1), or empty
+  // when that cannot be told this frame. Called on every tracked frame (the filter keeps
+  // the previous image).
+  cv::Mat MovingWithObject(const Frame& frame, const TrackResult& track);
   // Looks for the object in the selected region; true when tracking starts.
   bool Start(const Frame& frame, const RegionCandidate& region, const cv::Mat& labels,
              SystemStep* step);
@@ -108,6 +118,8 @@ class System {
   std::unique_ptr<ModelUpdater> updater_;
   bool active_ = false;
   int lost_frames_ = 0;
+  TrackedMotionFilter tracked_motion_;
+  std::optional<Rigid3d> previous_tracked_;  // world_from_obj of the previous frame, if tracked
 };
 
 }  // namespace unseen

@@ -30,7 +30,15 @@ std::string NamedFile(const YAML::Node& node, const std::string& where,
 
 YamlSection SystemSection(SystemOptions* o) {
   return {{"regions", YamlEnumField(&o->regions, &ParseRegionSource)},
-          {"reselect_after_lost_frames", YamlField(&o->reselect_after_lost_frames)}};
+          {"reselect_after_lost_frames", YamlField(&o->reselect_after_lost_frames)},
+          {"rebuild_from_tracked_motion", YamlField(&o->rebuild_from_tracked_motion)},
+          {"rebuild_min_interest", YamlField(&o->rebuild_min_interest)}};
+}
+
+YamlSection TrackedMotionSection(TrackedMotionFilterOptions* o) {
+  return {{"max_difference_px", YamlField(&o->max_difference_px)},
+          {"relative_difference", YamlField(&o->relative_difference)},
+          {"min_object_speed_px", YamlField(&o->min_object_speed_px)}};
 }
 
 YamlSection SegmentationSection(MotionSegmentationOptions* o) {
@@ -111,7 +119,8 @@ SystemConfig ParseSystemConfig(const std::string& yaml_text, const std::string& 
       {"segmentation", SegmentationSection(&config.system.segmentation)},
       {"selection", SelectionSection(&config.system.selection)},
       {"known_pose", KnownPoseSection(&config.system.known_pose)},
-      {"update", UpdateSection(&config.system.update)}};
+      {"update", UpdateSection(&config.system.update)},
+      {"tracked_motion", TrackedMotionSection(&config.system.tracked_motion)}};
   for (const auto& kv : root) {
     const std::string key = YamlKeyName(kv.first, what);
     const std::string where = what + ": " + key;
@@ -128,7 +137,7 @@ SystemConfig ParseSystemConfig(const std::string& yaml_text, const std::string& 
     } else {
       ThrowError(
           "{}: unknown section '{}' (known: system, filters, segmentation, selection, "
-          "known_pose, update, tracker, modeller)",
+          "known_pose, update, tracked_motion, tracker, modeller)",
           what, key);
     }
   }

@@ -6,6 +6,7 @@
 //   system:                      # SystemOptions
 //     regions: motion            # motion (segmentation) or interest (the map's parts)
 //     reselect_after_lost_frames: 10
+//     rebuild_from_tracked_motion: true  # rebuilds take the pixels moving with the object
 //   filters:                     # the interest filter bank (interest_filter_bank.h)
 //     - type: motion
 //       warmup_frames: 8
@@ -13,6 +14,7 @@
 //   selection: {min_interest_share: 0.05}                  # RegionSelectionOptions
 //   known_pose: {max_candidates: 12, min_confidence: 0.5}  # KnownModelPoseOptions
 //   update: {mode: incremental, every_frames: 30}          # ModelUpdateOptions
+//   tracked_motion: {max_difference_px: 1.0}              # TrackedMotionFilterOptions
 //   tracker: tracker.yaml        # TrackerOptions file, relative to this file
 //   modeller: model.yaml         # ModellerOptions file, relative to this file
 //

@@ -36,7 +36,8 @@ TEST(SystemConfig, EmptyTextKeepsTheDefaults) {
 
 TEST(SystemConfig, ReadsEverySection) {
   const SystemConfig config = ParseSystemConfig(R"(
-system: {regions: interest, reselect_after_lost_frames: 4}
+system: {regions: interest, reselect_after_lost_frames: 4, rebuild_from_tracked_motion: false}
+tracked_motion: {max_difference_px: 2.5}
 filters:
   - type: position
     min_m: [-0.1, -0.1, 0.3]
@@ -50,6 +51,8 @@ update: {mode: periodic, every_frames: 12, asynchronous: false}
                                                 "cfg.yaml");
   EXPECT_EQ(config.system.regions, RegionSource::kInterest);
   EXPECT_EQ(config.system.reselect_after_lost_frames, 4);
+  EXPECT_FALSE(config.system.rebuild_from_tracked_motion);
+  EXPECT_EQ(config.system.tracked_motion.max_difference_px, 2.5);
   ASSERT_TRUE(config.filters.has_value());
   ASSERT_EQ(config.filters->size(), 2);
   EXPECT_EQ(config.filters->filter(0).name(), "position");
@@ -99,6 +102,8 @@ TEST(SystemConfig, ErrorsNameTheFileTheKeyAndTheValue) {
   EXPECT_NE(e.find("reselect_after_lost_frames"), std::string::npos) << e;
   e = parse("filters: [{type: teleport}]");
   EXPECT_NE(e.find("teleport"), std::string::npos) << e;
+  e = parse("tracked_motion: {max_difference_px: -1}");
+  EXPECT_NE(e.find("max_difference_px"), std::string::npos) << e;
   e = parse("system: [1, 2");
   EXPECT_NE(e.find("malformed"), std::string::npos) << e;
   EXPECT_NE(ErrorOf([] {
