@@ -85,8 +85,11 @@ SequenceFigures Run(const fs::path& path, const Args& args, bool verbose) {
   Tracker tracker(sequence.rig(), sequence.LoadModel(), options);
   Timer build_timer;
   KnownModelPoser poser(&tracker, args.pose);
-  UNSEEN_LOG_INFO("{}: {} views in {:.0f} ms", fig.name, poser.views().size(),
-                  build_timer.ElapsedMilliseconds());
+  UNSEEN_LOG_INFO("{}: {} views in {:.0f} ms; oriented by {}", fig.name, poser.views().size(),
+                  build_timer.ElapsedMilliseconds(),
+                  tracker.given_model().HasAppearance() && options.photometric.enabled
+                      ? "appearance"
+                      : "silhouette only");
   const int camera = sequence.reference_camera();
   const RigCamera& rig_camera = sequence.rig().cameras[camera];
   for (int i = 0; i < sequence.num_frames(); i += every) {
