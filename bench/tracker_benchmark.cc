@@ -11,22 +11,21 @@
 //
 //   tracker_benchmark [--data DIR] [--scenes DIR] [--work DIR] [--json FILE]
 //                     [--groups dev,synthetic,...] [--max-frames N]
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <optional>
-#include <ctime>
-#include <thread>
-#include <string>
-#include <vector>
-
-#include <CLI/CLI.hpp>
-#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core/utility.hpp>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
 
 #include "unseen/eval/evaluation.h"
 #include "unseen/eval/sequence_poses.h"
@@ -34,11 +33,12 @@
 #include "unseen/mesh/primitives.h"
 #include "unseen/synth/scene.h"
 #include "unseen/synth/synthesizer.h"
+#include "unseen/system/frame_source.h"
+#include "unseen/system/tracking_session.h"
 #include "unseen/track/tracker.h"
 #include "unseen/util/error.h"
 #include "unseen/util/files.h"
 #include "unseen/util/logging.h"
-#include "unseen/util/timer.h"
 
 namespace unseen {
 namespace {
@@ -93,33 +93,35 @@ RunOutcome Execute(const Run& run, int max_frames) {
   UNSEEN_CHECK(start.has_value(), "{}: frame 0 has no ground truth", run.sequence_dir);
   tracker.Initialize(*start);
 
-  const int n = max_frames > 0 ? std::min(max_frames, sequence.num_frames())
-                               : sequence.num_frames();
-  std::vector<PoseRecord> poses;
-  poses.reserve(n);
+  const int n =
+      max_frames > 0 ? std::min(max_frames, sequence.num_frames()) : sequence.num_frames();
   RunOutcome out;
-  double track_seconds = 0.0;
-  std::clock_t cpu_ticks = 0;
-  for (int i = 0; i < n; ++i) {
-    const Frame frame = sequence.ReadFrame(i);
-    const std::clock_t cpu_start = std::clock();
-    Timer timer;
-    const TrackResult result = tracker.Track(frame);
-    const double seconds = timer.ElapsedSeconds();
-    cpu_ticks += std::clock() - cpu_start;
-    track_seconds += seconds;
-    out.mean_times += result.summary.times;
-    out.mean_pixels += result.summary.equations;
-    out.mean_renders += result.summary.renders;
-    out.mean_levels += result.summary.num_levels;
-    poses.push_back(result.ToPoseRecord(frame.frame_id, frame.time_s, 1e3 * seconds));
-  }
+  SequenceFrameSource source(&sequence);
+  SessionOptions session_options;
+  session_options.name = run.name;
+  session_options.max_frames = n;
+  session_options.read_ahead = false;  // the frame is read, then tracked, on one thread
+  TrackingSession session(source, session_options);
+  const SessionSummary summary = session.Run(
+      [&](const Frame& frame) {
+        // A frame that cannot be read in full ends the benchmark (Sequence::ReadFrame's error).
+        if (!frame.errors.empty()) ThrowError("{}", frame.errors.front().message);
+        return SessionStep::FromTrack(tracker.Track(frame));
+      },
+      [&](const Frame&, const SessionStep& step, const SessionFrame&) {
+        out.mean_pixels += step.track->summary.equations;
+        out.mean_renders += step.track->summary.renders;
+        out.mean_levels += step.track->summary.num_levels;
+        return true;
+      });
+  const std::vector<PoseRecord>& poses = summary.records;
   std::vector<GroundTruthFrame> truth = SequenceGroundTruth(sequence);
   truth.resize(std::min<size_t>(truth.size(), n));
   out.eval = Evaluate(truth, poses);
   out.frames = n;
-  out.fps = track_seconds > 0.0 ? n / track_seconds : 0.0;
+  out.fps = summary.fps();
   const double k = n > 0 ? 1.0 / n : 0.0;
+  out.mean_times = summary.stage_times;
   StageTimes& t = out.mean_times;
   t.predict_ms *= k;
   t.render_ms *= k;
@@ -130,7 +132,7 @@ RunOutcome Execute(const Run& run, int max_frames) {
   out.mean_pixels *= k;
   out.mean_renders *= k;
   out.mean_levels *= k;
-  out.cpu_ms = 1e3 * double(cpu_ticks) / CLOCKS_PER_SEC * k;
+  out.cpu_ms = summary.cpu_ms * k;
   return out;
 }
 

@@ -11,7 +11,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <map>
 #include <memory>
 #include <opencv2/highgui.hpp>
 #include <string>
@@ -21,15 +20,14 @@
 #include "tools/unseen/unknown_object.h"
 #include "unseen/camera/calibration_io.h"
 #include "unseen/eval/overlay.h"
-#include "unseen/io/pose_stream.h"
 #include "unseen/mesh/mesh_io.h"
 #include "unseen/system/frame_source.h"
 #include "unseen/system/system.h"
 #include "unseen/system/system_config.h"
 #include "unseen/system/system_overlay.h"
+#include "unseen/system/tracking_session.h"
 #include "unseen/util/error.h"
 #include "unseen/util/logging.h"
-#include "unseen/util/timer.h"
 
 namespace unseen::cli {
 namespace {
@@ -149,86 +147,64 @@ void RunSystem(const RunArgs& args) {
                  "--overlay FILE instead");
     cv::namedWindow(kWindow, cv::WINDOW_AUTOSIZE);
   }
-  std::unique_ptr<PoseStreamWriter> writer;
-  if (!args.out.empty()) writer = std::make_unique<PoseStreamWriter>(args.out);
-  std::vector<PoseRecord> records;
-  std::map<SystemStatus, int> statuses;
-  int frames = 0;
-  double sum_ms = 0.0;
-  // The system's object frame to the true one (a fixed change of object frame), from the
-  // first tracked frame, as `eval --align-first` does.
-  std::optional<Rigid3d> system_obj_from_true_obj;
-  double sum_t_mm = 0.0, sum_r_deg = 0.0;
-  int scored = 0, within = 0, with_truth = 0;
-  while (args.max_frames <= 0 || frames < args.max_frames) {
-    std::optional<Frame> frame = source->Next();
-    if (!frame) break;
-    for (const FrameReadError& e : frame->errors) {
-      UNSEEN_LOG_WARN("run: frame {}: camera {}: {}", frame->frame_id, e.camera, e.message);
-    }
-    Timer timer;
-    const SystemStep step = system.Step(*frame);
-    const double ms = timer.ElapsedMilliseconds();
-    sum_ms += ms;
-    ++frames;
-    ++statuses[step.status];
-    if (!step.note.empty()) {
-      UNSEEN_LOG_INFO("run: frame {}: {}: {}", frame->frame_id, ToString(step.status), step.note);
-    }
-    if (!args.overlay.empty() || args.show) {
-      cv::Mat image = frame->images[reference].empty()
-                          ? cv::Mat(reference_camera.intrinsics.height,
-                                    reference_camera.intrinsics.width, CV_8UC3, cv::Scalar::all(0))
-                          : frame->images[reference].clone();
-      const Mesh* drawn = system.tracker() != nullptr ? &system.tracker()->model() : nullptr;
-      DrawSystemOverlay(step, drawn, reference_camera.intrinsics, reference_camera.cam_from_world(),
-                        SystemOverlayOptions(), &image);
-      if (!args.overlay.empty()) {
-        if (!overlay) {
-          overlay = std::make_unique<OverlaySink>(
-              args.overlay, source->fps() > 0 ? source->fps() : 30.0, image.size());
+  SessionOptions session_options;
+  session_options.name = "run";
+  session_options.max_frames = args.max_frames;
+  session_options.read_ahead = false;  // the system's own pace, as a live camera delivers
+  session_options.poses_file = args.out;
+  TrackingSession session(*source, session_options);
+  SystemStep last;  // the frame's step, for the overlay
+  const SessionSummary summary = session.Run(
+      [&](const Frame& frame) {
+        for (const FrameReadError& e : frame.errors) {
+          UNSEEN_LOG_WARN("run: frame {}: camera {}: {}", frame.frame_id, e.camera, e.message);
         }
-        overlay->Write(image, frame->frame_id);
-      }
-      if (args.show) {
-        cv::imshow(kWindow, image);
-        const int key = cv::waitKey(1);
-        if (key == 'q' || key == 27) break;  // q or Esc ends the run
-      }
-    }
-    const std::optional<Rigid3d> truth =
-        sequence != nullptr ? sequence->GroundTruth(frames - 1) : std::nullopt;
-    with_truth += truth.has_value();
-    if (!step.track) continue;
-    const PoseRecord record = step.track->ToPoseRecord(frame->frame_id, frame->time_s, ms);
-    if (writer) writer->Write(record);
-    records.push_back(record);
-    if (truth && step.status == SystemStatus::kTracking) {
-      if (!system_obj_from_true_obj) {
-        system_obj_from_true_obj = step.track->world_from_obj.Inverse() * *truth;
-      }
-      const PoseDifference d =
-          Difference(step.track->world_from_obj * *system_obj_from_true_obj, *truth);
-      sum_t_mm += 1e3 * d.translation;
-      sum_r_deg += d.rotation_rad * 180.0 / M_PI;
-      ++scored;
-      within += d.translation < 0.05 && d.rotation_rad * 180.0 / M_PI < 5.0;
-    }
-  }
-  std::printf("run %s: %d frames, %.1f fps (%.2f ms/frame)\n", source->name().c_str(), frames,
-              sum_ms > 0 ? 1e3 * frames / sum_ms : 0.0, frames ? sum_ms / frames : 0.0);
+        last = system.Step(frame);
+        SessionStep out;
+        out.track = last.track;
+        out.status = ToString(last.status);
+        out.tracking = last.status == SystemStatus::kTracking;
+        out.note = last.note;
+        return out;
+      },
+      [&](const Frame& frame, const SessionStep&, const SessionFrame&) {
+        if (args.overlay.empty() && !args.show) return true;
+        cv::Mat image =
+            frame.images[reference].empty()
+                ? cv::Mat(reference_camera.intrinsics.height, reference_camera.intrinsics.width,
+                          CV_8UC3, cv::Scalar::all(0))
+                : frame.images[reference].clone();
+        const Mesh* drawn = system.tracker() != nullptr ? &system.tracker()->model() : nullptr;
+        DrawSystemOverlay(last, drawn, reference_camera.intrinsics,
+                          reference_camera.cam_from_world(), SystemOverlayOptions(), &image);
+        if (!args.overlay.empty()) {
+          if (!overlay) {
+            overlay = std::make_unique<OverlaySink>(
+                args.overlay, source->fps() > 0 ? source->fps() : 30.0, image.size());
+          }
+          overlay->Write(image, frame.frame_id);
+        }
+        if (args.show) {
+          cv::imshow(kWindow, image);
+          const int key = cv::waitKey(1);
+          if (key == 'q' || key == 27) return false;  // q or Esc ends the run
+        }
+        return true;
+      });
+  std::printf("run %s: %d frames, %.1f fps (%.2f ms/frame)\n", source->name().c_str(),
+              summary.frames, summary.fps(), summary.mean_ms());
   std::printf("  frames:");
   for (const SystemStatus s : {SystemStatus::kLearning, SystemStatus::kNoObject,
                                SystemStatus::kTracking, SystemStatus::kLost}) {
-    std::printf(" %s %d", ToString(s), statuses[s]);
+    std::printf(" %s %d", ToString(s), summary.count(ToString(s)));
   }
   std::printf("\n");
-  if (with_truth > 0) {
+  if (summary.truth_frames > 0) {
     std::printf(
         "  against ground truth after aligning the first tracked pose: %d of %d frames "
         "(%.1f %%) within 5 cm/5 deg; mean %.2f mm %.3f deg over the %d tracked\n",
-        within, with_truth, 100.0 * within / with_truth, scored ? sum_t_mm / scored : 0.0,
-        scored ? sum_r_deg / scored : 0.0, scored);
+        summary.within, summary.truth_frames, 100.0 * summary.within / summary.truth_frames,
+        summary.aligned.mean_mm(), summary.aligned.mean_deg(), summary.aligned.frames);
   }
 }
 

@@ -11,28 +11,28 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <future>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tools/unseen/commands.h"
 #include "tools/unseen/known_object.h"
 #include "tools/unseen/unknown_object.h"
 #include "unseen/eval/overlay.h"
-#include "unseen/io/pose_stream.h"
 #include "unseen/io/sequence.h"
 #include "unseen/mesh/mesh_io.h"
 #include "unseen/model/model_updater.h"
 #include "unseen/model/modeller.h"
+#include "unseen/system/frame_source.h"
+#include "unseen/system/tracking_session.h"
 #include "unseen/track/tracker.h"
 #include "unseen/util/error.h"
 #include "unseen/util/files.h"
 #include "unseen/util/logging.h"
 #include "unseen/util/progress.h"
-#include "unseen/util/timer.h"
 
 namespace unseen::cli {
 namespace {
@@ -198,79 +198,63 @@ void RunTrack(const TrackArgs& args) {
     tracker.Initialize(initial);
   }
 
-  std::unique_ptr<PoseStreamWriter> writer;
-  if (!args.out.empty()) writer = std::make_unique<PoseStreamWriter>(args.out);
   const int available = sequence.num_frames() - start_index;
   const int frames = args.max_frames > 0 ? std::min(args.max_frames, available) : available;
-  std::vector<PoseRecord> records;
-  StageTimes sum_times;
-  double sum_process_ms = 0.0;
-  int lost = 0, gt_frames = 0;
-  double sum_t_mm = 0, max_t_mm = 0, sum_r_deg = 0, max_r_deg = 0;
+  SequenceFrameSource source(&sequence, start_index,
+                             found ? std::optional<Frame>(found->frame) : std::nullopt);
+  SessionOptions session_options;
+  session_options.name = "track";
+  session_options.max_frames = frames;
+  session_options.poses_file = args.out;
+  TrackingSession session(source, session_options);
   // Frames done, fps and ETA on stderr, when it is a terminal (logs stay clean).
   ProgressLine progress("track", frames, isatty(fileno(stderr)) != 0);
-  // The next frame is read (decoded, undistorted) on another thread while this one is
-  // tracked; one read at a time, in order. An image that cannot be read (a dropped frame,
-  // a damaged file) is a warning: its camera sits the frame out, and a frame without any
-  // image is reported lost with the held pose (Tracker::Track, SkipFrame).
-  auto read = [&](int i) {
-    return std::async(std::launch::async, [&sequence, &found, index = start_index + i] {
-      return found && found->index == index ? found->frame : sequence.TryReadFrame(index);
-    });
-  };
+  // An image that cannot be read (a dropped frame, a damaged file) is a warning: its camera
+  // sits the frame out, and a frame without any image is reported lost with the held pose
+  // (Tracker::Track, SkipFrame).
   int unreadable = 0;  // frames with a colour image that could not be read
-  std::future<Frame> next;
-  if (frames > 0) next = read(0);
-  for (int i = 0; i < frames; ++i) {
-    const Frame frame = next.get();
-    if (i + 1 < frames) next = read(i + 1);
-    const bool any_image = std::any_of(frame.images.begin(), frame.images.end(),
-                                       [](const cv::Mat& im) { return !im.empty(); });
-    bool image_missing = false;
-    for (const FrameReadError& e : frame.errors) {
-      image_missing = image_missing || !e.depth;
-      const char* consequence = e.depth     ? "depth skipped"
-                                : any_image ? "tracked with the other cameras"
-                                            : "frame reported lost, pose held";
-      UNSEEN_LOG_WARN("track: frame {}: camera {}: {}; {}", frame.frame_id,
-                      sequence.rig().cameras[e.camera].name, e.message, consequence);
-    }
-    if (image_missing) ++unreadable;
-    Timer timer;
-    const TrackResult r = i == 0 && found ? found->pose.tracked : tracker.Track(frame);
-    // A model built beside the tracking takes over at this frame boundary.
-    if (updater) updater->AfterTracked(frame, r, &tracker);
-    // The frame where the model was found took the search.
-    const double ms =
-        i == 0 && found ? found->pose.match_ms + found->pose.align_ms : timer.ElapsedMilliseconds();
-    sum_process_ms += ms;
-    sum_times += r.summary.times;
-    const PoseRecord record = r.ToPoseRecord(frame.frame_id, frame.time_s, ms);
-    if (writer) writer->Write(record);
-    records.push_back(record);
-    if (r.status != TrackStatus::kTracking) ++lost;
-    std::string error_text;
-    if (const std::optional<Rigid3d> gt = sequence.GroundTruth(start_index + i)) {
-      const PoseDifference d = Difference(r.world_from_obj, *gt);
-      const double t_mm = 1e3 * d.translation, r_deg = d.rotation_rad * 180.0 / M_PI;
-      sum_t_mm += t_mm;
-      sum_r_deg += r_deg;
-      max_t_mm = std::max(max_t_mm, t_mm);
-      max_r_deg = std::max(max_r_deg, r_deg);
-      ++gt_frames;
-      error_text = fmt::format(" err {:.2f} mm {:.3f} deg", t_mm, r_deg);
-    }
-    UNSEEN_LOG_DEBUG("frame {}:{} {}", frame.frame_id, error_text, r.BriefReport());
-    progress.Update(i + 1);
-  }
+  bool first = true;
+  const SessionSummary summary = session.Run(
+      [&](const Frame& frame) {
+        const bool any_image = std::any_of(frame.images.begin(), frame.images.end(),
+                                           [](const cv::Mat& im) { return !im.empty(); });
+        bool image_missing = false;
+        for (const FrameReadError& e : frame.errors) {
+          image_missing = image_missing || !e.depth;
+          const char* consequence = e.depth     ? "depth skipped"
+                                    : any_image ? "tracked with the other cameras"
+                                                : "frame reported lost, pose held";
+          UNSEEN_LOG_WARN("track: frame {}: camera {}: {}; {}", frame.frame_id,
+                          sequence.rig().cameras[e.camera].name, e.message, consequence);
+        }
+        if (image_missing) ++unreadable;
+        // The frame where the model was found took the search.
+        if (std::exchange(first, false) && found) {
+          return SessionStep::FromTrack(found->pose.tracked,
+                                        found->pose.match_ms + found->pose.align_ms);
+        }
+        const TrackResult r = tracker.Track(frame);
+        // A model built beside the tracking takes over at this frame boundary.
+        if (updater) updater->AfterTracked(frame, r, &tracker);
+        return SessionStep::FromTrack(r);
+      },
+      [&](const Frame& frame, const SessionStep& step, const SessionFrame& seen) {
+        const std::string error_text =
+            seen.error ? fmt::format(" err {:.2f} mm {:.3f} deg", 1e3 * seen.error->translation,
+                                     seen.error->rotation_rad * 180.0 / M_PI)
+                       : std::string();
+        UNSEEN_LOG_DEBUG("frame {}:{} {}", frame.frame_id, error_text, step.track->BriefReport());
+        progress.Update(seen.index + 1);
+        return true;
+      });
   progress.Finish();
 
-  const double fps = sum_process_ms > 0 ? 1e3 * frames / sum_process_ms : 0.0;
   const int ncam = sequence.rig().size();
+  const int lost = summary.frames - summary.tracking;
   std::printf("track %s: %d frames, %d camera(s), %.1f fps (%.3f ms/frame), %d lost\n",
-              args.sequence.c_str(), frames, ncam, fps, frames ? sum_process_ms / frames : 0.0,
-              lost);
-  const double n = std::max(frames, 1);
+              args.sequence.c_str(), summary.frames, ncam, summary.fps(), summary.mean_ms(), lost);
+  const double n = std::max(summary.frames, 1);
+  const StageTimes& sum_times = summary.stage_times;
   std::printf("  mean ms: predict %.3f render %.3f preprocess %.3f select %.3f solve %.3f\n",
               sum_times.predict_ms / n, sum_times.render_ms / n, sum_times.preprocess_ms / n,
               sum_times.select_ms / n, sum_times.solve_ms / n);
@@ -296,26 +280,28 @@ void RunTrack(const TrackArgs& args) {
   if (unreadable > 0) {
     std::printf("  %d frame(s) with an unreadable image (see the warnings)\n", unreadable);
   }
-  if (gt_frames > 0) {
-    std::printf("  error vs ground truth (%d frames): translation mean %.2f mm max %.2f mm, "
-                "rotation mean %.3f deg max %.3f deg\n",
-                gt_frames, sum_t_mm / gt_frames, max_t_mm, sum_r_deg / gt_frames, max_r_deg);
+  const SessionErrors& e = summary.given;
+  if (e.frames > 0) {
+    std::printf(
+        "  error vs ground truth (%d frames): translation mean %.2f mm max %.2f mm, "
+        "rotation mean %.3f deg max %.3f deg\n",
+        e.frames, e.mean_mm(), e.max_mm, e.mean_deg(), e.max_deg);
   }
   if (!args.stats.empty()) {
     nlohmann::json j;
     j["sequence"] = args.sequence;
-    j["frames"] = frames;
+    j["frames"] = summary.frames;
     j["cameras"] = ncam;
-    j["fps"] = fps;
+    j["fps"] = summary.fps();
     j["lost_frames"] = lost;
     j["unreadable_frames"] = unreadable;
-    j["mean_ms"] = {{"predict", sum_times.predict_ms / n}, {"render", sum_times.render_ms / n},
-                    {"preprocess", sum_times.preprocess_ms / n},
-                    {"select", sum_times.select_ms / n}, {"solve", sum_times.solve_ms / n},
-                    {"total", sum_process_ms / n}};
-    if (gt_frames > 0) {
-      j["translation_error_mm"] = {{"mean", sum_t_mm / gt_frames}, {"max", max_t_mm}};
-      j["rotation_error_deg"] = {{"mean", sum_r_deg / gt_frames}, {"max", max_r_deg}};
+    j["mean_ms"] = {
+        {"predict", sum_times.predict_ms / n},       {"render", sum_times.render_ms / n},
+        {"preprocess", sum_times.preprocess_ms / n}, {"select", sum_times.select_ms / n},
+        {"solve", sum_times.solve_ms / n},           {"total", summary.process_ms / n}};
+    if (e.frames > 0) {
+      j["translation_error_mm"] = {{"mean", e.mean_mm()}, {"max", e.max_mm}};
+      j["rotation_error_deg"] = {{"mean", e.mean_deg()}, {"max", e.max_deg}};
     }
     std::ofstream out(args.stats);
     UNSEEN_CHECK(out.good(), "track: cannot write stats file '{}'", args.stats);
@@ -324,7 +310,7 @@ void RunTrack(const TrackArgs& args) {
   if (!args.overlay.empty()) {
     int camera = sequence.rig().Find(reference_name);
     if (camera < 0) camera = 0;
-    WriteOverlay(sequence, records, camera, args.overlay);
+    WriteOverlay(sequence, summary.records, camera, args.overlay);
   }
 }
 

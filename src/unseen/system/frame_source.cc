@@ -5,6 +5,7 @@
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 #include "unseen/util/error.h"
 #include "unseen/util/logging.h"
@@ -12,15 +13,33 @@
 namespace unseen {
 
 SequenceFrameSource::SequenceFrameSource(Sequence sequence, int first_frame)
-    : sequence_(std::move(sequence)), next_(first_frame) {
-  UNSEEN_CHECK(first_frame >= 0 && first_frame < sequence_.num_frames(),
-               "{}: first frame {} is outside [0, {})", sequence_.path(), first_frame,
-               sequence_.num_frames());
+    : owned_(std::move(sequence)), sequence_(&*owned_), first_(first_frame), next_(first_frame) {
+  CheckFirstFrame();
+}
+
+SequenceFrameSource::SequenceFrameSource(const Sequence* sequence, int first_frame,
+                                         std::optional<Frame> first)
+    : sequence_(sequence), first_(first_frame), next_(first_frame), first_read_(std::move(first)) {
+  UNSEEN_CHECK(sequence_ != nullptr, "frame source: no sequence");
+  CheckFirstFrame();
+}
+
+void SequenceFrameSource::CheckFirstFrame() const {
+  UNSEEN_CHECK(first_ >= 0 && first_ < sequence_->num_frames(),
+               "{}: first frame {} is outside [0, {})", sequence_->path(), first_,
+               sequence_->num_frames());
 }
 
 std::optional<Frame> SequenceFrameSource::Next() {
-  if (next_ >= sequence_.num_frames()) return std::nullopt;
-  return sequence_.TryReadFrame(next_++);
+  if (next_ >= sequence_->num_frames()) return std::nullopt;
+  if (next_++ == first_ && first_read_) return std::exchange(first_read_, std::nullopt);
+  return sequence_->TryReadFrame(next_ - 1);
+}
+
+std::optional<Rigid3d> SequenceFrameSource::GroundTruth(int n) const {
+  const int index = first_ + n;
+  if (n < 0 || index >= sequence_->num_frames()) return std::nullopt;
+  return sequence_->GroundTruth(index);
 }
 
 void CaptureOptions::Check() const {

@@ -29,24 +29,39 @@ class FrameSource {
   virtual std::optional<Frame> Next() = 0;
   // A sequence behind the source (for ground truth and the model file), or null.
   virtual const Sequence* sequence() const { return nullptr; }
+  // The true world_from_obj of the n-th frame Next() returned (0-based), or std::nullopt
+  // when the source has none for it.
+  virtual std::optional<Rigid3d> GroundTruth(int n) const { return std::nullopt; }
   virtual std::string name() const = 0;
 };
 
 // A sequence folder, video file or image folder (io/sequence.h), frame by frame from
-// `first_frame`.
+// `first_frame`; frames that cannot be read in full come with Frame::errors.
 class SequenceFrameSource : public FrameSource {
  public:
   explicit SequenceFrameSource(Sequence sequence, int first_frame = 0);
-  const Rig& rig() const override { return sequence_.rig(); }
-  int reference_camera() const override { return sequence_.reference_camera(); }
-  double fps() const override { return sequence_.fps(); }
+  // Reads `*sequence`, which must outlive the source. `first`: frame `first_frame` when it
+  // was read already (the first Next() returns it instead of reading it again).
+  explicit SequenceFrameSource(const Sequence* sequence, int first_frame = 0,
+                               std::optional<Frame> first = std::nullopt);
+  SequenceFrameSource(const SequenceFrameSource&) = delete;
+  SequenceFrameSource& operator=(const SequenceFrameSource&) = delete;
+  const Rig& rig() const override { return sequence_->rig(); }
+  int reference_camera() const override { return sequence_->reference_camera(); }
+  double fps() const override { return sequence_->fps(); }
   std::optional<Frame> Next() override;
-  const Sequence* sequence() const override { return &sequence_; }
-  std::string name() const override { return sequence_.path(); }
+  const Sequence* sequence() const override { return sequence_; }
+  std::optional<Rigid3d> GroundTruth(int n) const override;
+  std::string name() const override { return sequence_->path(); }
 
  private:
-  Sequence sequence_;
+  void CheckFirstFrame() const;
+
+  std::optional<Sequence> owned_;
+  const Sequence* sequence_ = nullptr;
+  int first_ = 0;
   int next_ = 0;
+  std::optional<Frame> first_read_;
 };
 
 struct CaptureOptions {
