@@ -240,18 +240,24 @@ void TrackedMotionFilter::Apply(const FilterFrame& frame, cv::Mat* interest) {
       previous_from_current.RotationMatrix() * origin + previous_from_current.translation());
   if ((origin_before - origin_px).norm() < options_.min_object_speed_px) return;
 
-  cv::Mat flow;
-  flow_->calc(grey, previous, flow);  // at this frame's pixels, towards the previous frame
+  // Only where there is interest left (2.4), with a margin for the flow's support.
+  cv::Mat any;
+  cv::compare(*interest, 0.0f, any, cv::CMP_GT);
+  const cv::Rect region =
+      (cv::boundingRect(any) + cv::Size(32, 32) - cv::Point(16, 16)) & cv::Rect({}, grey.size());
+  if (region.width < 8 || region.height < 8) return;
+  cv::Mat flow;  // at this frame's pixels of `region`, towards the previous frame
+  flow_->calc(grey(region).clone(), previous(region).clone(), flow);  // DIS: continuous only
   const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
   const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
   const float origin_depth = static_cast<float>(origin.z());
   const float base = static_cast<float>(options_.max_difference_px);
   const float relative = static_cast<float>(options_.relative_difference);
-  for (int y = 0; y < flow.rows; ++y) {
-    const cv::Vec2f* f = flow.ptr<cv::Vec2f>(y);
+  for (int y = region.y; y < region.y + region.height; ++y) {
+    const cv::Vec2f* f = flow.ptr<cv::Vec2f>(y - region.y) - region.x;
     const float* depth = frame.depth.empty() ? nullptr : frame.depth.ptr<float>(y);
     float* s = interest->ptr<float>(y);
-    for (int x = 0; x < flow.cols; ++x) {
+    for (int x = region.x; x < region.x + region.width; ++x) {
       if (s[x] <= 0.0f) continue;  // (2.4)
       const float z = depth != nullptr && depth[x] > 0.0f ? depth[x] : origin_depth;
       const Eigen::Vector3f point(z * (x - cx) / fx, z * (y - cy) / fy, z);

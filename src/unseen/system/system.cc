@@ -135,11 +135,26 @@ cv::Mat System::MovingWithObject(const Frame& frame, const TrackResult& track) {
       }
     }
   }
-  cv::Mat interest(image.size(), CV_32FC1, cv::Scalar(1.0f));
+  // Judged only around the object: its bounding sphere's square, half as large again.
+  cv::Mat interest(image.size(), CV_32FC1, cv::Scalar(0.0f));
+  if (in.world_from_obj) {
+    Eigen::Vector3f centre;
+    float radius = 0.0f;
+    tracker_->model().BoundingSphere(&centre, &radius);
+    const Eigen::Vector3d c =
+        camera.cam_from_world() * (track.world_from_obj * centre.cast<double>());
+    if (c.z() > 1e-3) {
+      const Eigen::Vector2d px = camera.intrinsics.Project(c);
+      const double r = 1.5 * camera.intrinsics.fx * radius / c.z();
+      const cv::Rect around(cvFloor(px.x() - r), cvFloor(px.y() - r), cvCeil(2 * r), cvCeil(2 * r));
+      interest(around & cv::Rect({}, image.size())).setTo(1.0f);
+    }
+  }
   tracked_motion_.Apply(in, &interest);  // keeps this image for the next frame
   if (!in.world_from_obj) return cv::Mat();
+  // (A region left at 1 everywhere: the object hardly moved, nothing told.)
   cv::Mat moving = interest > options_.rebuild_min_interest;
-  if (cv::countNonZero(moving) == static_cast<int>(moving.total())) return cv::Mat();
+  if (cv::countNonZero(interest == 1.0f) == cv::countNonZero(interest > 0.0f)) return cv::Mat();
   // Texture-less patches inside the object flow with their surroundings only roughly:
   // close small gaps.
   cv::morphologyEx(moving, moving, cv::MORPH_CLOSE,
