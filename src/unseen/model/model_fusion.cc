@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "unseen/mesh/decimate.h"
 #include "unseen/render/rasterizer.h"
@@ -53,16 +54,21 @@ void SurfaceDepth(const ModelBuild& build, const PinholeCamera& camera, const Ri
 // textured part would pull the tracker's photometric term; without it, the model ends
 // where its texture ends, as a single build's does.
 void KeepTexturedTriangles(double min_cos, Mesh* mesh) {
+  std::vector<Eigen::Vector3d> projector_centres;  // in the object frame
+  for (const Projector& p : mesh->projectors) {
+    projector_centres.push_back(p.cam_from_obj.Inverse().translation());
+  }
   std::erase_if(mesh->triangles, [&](const Eigen::Vector3i& t) {
     const Eigen::Vector3f& a = mesh->vertices[t[0]];
     const Eigen::Vector3f& b = mesh->vertices[t[1]];
     const Eigen::Vector3f& c = mesh->vertices[t[2]];
     const Eigen::Vector3d centre = ((a + b + c) / 3.0f).cast<double>();
     const Eigen::Vector3d normal = (b - a).cross(c - a).cast<double>().normalized();
-    for (const Projector& p : mesh->projectors) {
+    for (size_t i = 0; i < mesh->projectors.size(); ++i) {
+      const Projector& p = mesh->projectors[i];
       const Eigen::Vector3d in_cam = p.cam_from_obj * centre;
       if (in_cam.z() <= 0.0) continue;
-      const Eigen::Vector3d to_projector = (p.cam_from_obj.Inverse().translation() - centre);
+      const Eigen::Vector3d to_projector = projector_centres[i] - centre;
       if (normal.dot(to_projector.normalized()) < min_cos) continue;
       const Eigen::Vector2d px = p.camera.Project(in_cam);
       const int x = static_cast<int>(std::lround(px.x())),
