@@ -1,20 +1,21 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/camera/calibration_io.h"
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
-
-#include <fmt/format.h>
-#include <fmt/ranges.h>
 #include <opencv2/core.hpp>
-#include <yaml-cpp/yaml.h>
+#include <sstream>
 
 #include "unseen/util/error.h"
 #include "unseen/util/files.h"
+#include "unseen/util/yaml_options.h"
 
 namespace unseen {
 
@@ -277,12 +278,7 @@ PinholeCamera LoadOpenCvCalibration(const std::string& path) {
 
 PinholeCamera LoadRosCameraInfo(const std::string& path) {
   const std::string text = ReadText(path);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    ThrowError("{}: malformed YAML: {}", path, e.what());
-  }
+  const YAML::Node root = ParseYamlText(text, path);
   return ReadRos(root, path);
 }
 

@@ -254,23 +254,14 @@ ModellerOptions FromYaml(const YAML::Node& root, const std::string& what, Modell
         {"max_error_voxels", YamlField(&fu.max_error_voxels)}}},
   };
   ApplyYamlSections(root, what, sections);
-  try {
-    o.Check();
-  } catch (const Error& e) {
-    ThrowError("{}: {}", what, e.what());
-  }
+  CheckOptionsFrom(o, what);
   return o;
 }
 
 }  // namespace
 
 ModellerOptions ParseModellerOptions(const std::string& yaml_text, const std::string& what) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    ThrowError("{}: malformed YAML: {}", what, e.what());
-  }
+  const YAML::Node root = ParseYamlText(yaml_text, what);
   return FromYaml(root, what, ModellerOptions());
 }
 

@@ -221,12 +221,7 @@ InterestFilterBank FromYaml(const YAML::Node& root, const std::string& what,
 
 InterestFilterBank ParseInterestFilterBank(const std::string& yaml_text, const std::string& what,
                                            const std::string& base_folder) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    ThrowError("{}: malformed YAML: {}", what, e.what());
-  }
+  const YAML::Node root = ParseYamlText(yaml_text, what);
   return FromYaml(root, what, base_folder);
 }
 

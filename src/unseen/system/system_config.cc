@@ -104,12 +104,7 @@ RegionSource ParseRegionSource(const std::string& text, const std::string& where
 
 SystemConfig ParseSystemConfig(const std::string& yaml_text, const std::string& what,
                                const std::string& base_dir) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    ThrowError("{}: malformed YAML: {}", what, e.what());
-  }
+  const YAML::Node root = ParseYamlText(yaml_text, what);
   SystemConfig config;
   config.source = what;
   if (root.IsNull()) return config;
@@ -141,11 +136,7 @@ SystemConfig ParseSystemConfig(const std::string& yaml_text, const std::string& 
           what, key);
     }
   }
-  try {
-    config.system.Check();
-  } catch (const Error& e) {
-    ThrowError("{}: {}", what, e.what());
-  }
+  CheckOptionsFrom(config.system, what);
   return config;
 }
 

@@ -364,19 +364,10 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
 }  // namespace
 
 TrackerOptions ParseTrackerOptions(const std::string& yaml_text, const std::string& what) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    ThrowError("{}: malformed YAML: {}", what, e.what());
-  }
+  const YAML::Node root = ParseYamlText(yaml_text, what);
   TrackerOptions options;
   Apply(root, what, &options);
-  try {
-    options.Check();
-  } catch (const Error& e) {
-    ThrowError("{}: {}", what, e.what());
-  }
+  CheckOptionsFrom(options, what);
   return options;
 }
 
@@ -384,11 +375,7 @@ TrackerOptions LoadTrackerOptions(const std::string& path) {
   const YAML::Node root = LoadYamlFile(path, "tracker options");
   TrackerOptions options;
   Apply(root, path, &options);
-  try {
-    options.Check();
-  } catch (const Error& e) {
-    ThrowError("{}: {}", path, e.what());
-  }
+  CheckOptionsFrom(options, path);
   return options;
 }
 

@@ -48,4 +48,12 @@ YAML::Node LoadYamlFile(const std::string& path, const std::string& kind) {
   }
 }
 
+YAML::Node ParseYamlText(const std::string& text, const std::string& what) {
+  try {
+    return YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    ThrowError("{}: malformed YAML: {}", what, e.what());
+  }
+}
+
 }  // namespace unseen

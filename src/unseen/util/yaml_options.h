@@ -30,6 +30,16 @@ YamlSetter YamlField(T* field) {
 }
 
 // An enumeration read from its name by `parse(text, where)`.
+// A number written into `field` times `scale` (a file in mm or degrees, a struct in metres
+// or radians).
+inline YamlSetter YamlScaledField(double* field, double scale) {
+  return [field, scale](const YAML::Node& node, const std::string& where) {
+    double value = 0.0;
+    YamlField (&value)(node, where);
+    *field = value * scale;
+  };
+}
+
 template <typename E>
 YamlSetter YamlEnumField(E* field, E (*parse)(const std::string&, const std::string&)) {
   return [field, parse](const YAML::Node& node, const std::string& where) {
@@ -60,5 +70,18 @@ void ApplyYamlSections(const YAML::Node& root, const std::string& what,
 // The YAML document of a file; throws naming `path` ("cannot read the `kind` file",
 // malformed YAML).
 YAML::Node LoadYamlFile(const std::string& path, const std::string& kind);
+
+// The YAML document `text`; throws unseen::Error "<what>: malformed YAML: ..." otherwise.
+YAML::Node ParseYamlText(const std::string& text, const std::string& what);
+
+// options.Check(), its error prefixed with `what` (the file the options came from).
+template <typename Options>
+void CheckOptionsFrom(const Options& options, const std::string& what) {
+  try {
+    options.Check();
+  } catch (const Error& e) {
+    ThrowError("{}: {}", what, e.what());
+  }
+}
 
 }  // namespace unseen
