@@ -136,6 +136,8 @@ int main(int argc, char** argv) {
   app.add_option("--silhouette-weight", args.pose.views.silhouette_weight,
                  "Weight of the silhouette cue");
   app.add_option("--candidates", args.pose.max_candidates, "Start poses tracked per start");
+  app.add_option("--separation", args.pose.min_separation_deg,
+                 "Least angle between two start poses, degrees");
   bool verbose = false;
   app.add_flag("-v,--verbose", verbose, "Log every start");
   CLI11_PARSE(app, argc, argv);
