@@ -13,6 +13,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "bench_sequences.h"
 #include "unseen/geometry/rigid3.h"
 #include "unseen/io/sequence.h"
 #include "unseen/select/known_model_pose.h"
@@ -40,21 +41,6 @@ struct SequenceFigures {
   double sum_ms = 0.0, sum_views_ms = 0.0;
   double sum_t_mm = 0.0, sum_r_deg = 0.0;  // over correct starts
 };
-
-bool IsSequence(const fs::path& p) {
-  return fs::exists(p / "sequence.json") || fs::exists(p / "scene_camera.json");
-}
-
-std::vector<fs::path> SequencesIn(const fs::path& dir) {
-  std::vector<fs::path> out;
-  if (!fs::is_directory(dir)) return out;
-  if (IsSequence(dir)) return {dir};
-  for (const auto& entry : fs::directory_iterator(dir)) {
-    if (entry.is_directory() && IsSequence(entry.path())) out.push_back(entry.path());
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
 
 // The candidate closest in rotation to the truth: its rank and its errors (for -v).
 std::string NearestCandidate(const std::vector<Rigid3d>& candidates, const Rigid3d& truth) {
@@ -142,12 +128,7 @@ int main(int argc, char** argv) {
   app.add_flag("-v,--verbose", verbose, "Log every start");
   CLI11_PARSE(app, argc, argv);
   try {
-    std::vector<fs::path> paths = SequencesIn(args.data_dir);
-    if (paths.empty()) UNSEEN_LOG_WARN("{}: no sequences found", args.data_dir);
-    std::stringstream extra(args.extra);
-    for (std::string dir; std::getline(extra, dir, ',');) {
-      for (const fs::path& p : SequencesIn(dir)) paths.push_back(p);
-    }
+    const std::vector<fs::path> paths = bench::BenchmarkSequences(args.data_dir, args.extra);
     nlohmann::json results = nlohmann::json::array();
     fmt::print("{:<28} {:>6} {:>7} {:>7} {:>6} {:>8} {:>8} {:>9}\n", "sequence", "starts",
                "correct", "no pose", "wrong", "mm", "deg", "ms/start");

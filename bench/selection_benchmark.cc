@@ -18,8 +18,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <sstream>
 
+#include "bench_sequences.h"
 #include "unseen/io/sequence.h"
 #include "unseen/render/rasterizer.h"
 #include "unseen/select/motion_segmentation.h"
@@ -50,21 +50,6 @@ struct SequenceFigures {
   double sum_iou = 0.0;  // over right selections
   double sum_ms = 0.0;
 };
-
-bool IsSequence(const fs::path& p) {
-  return fs::exists(p / "sequence.json") || fs::exists(p / "scene_camera.json");
-}
-
-std::vector<fs::path> SequencesIn(const fs::path& dir) {
-  std::vector<fs::path> out;
-  if (!fs::is_directory(dir)) return out;
-  if (IsSequence(dir)) return {dir};
-  for (const auto& entry : fs::directory_iterator(dir)) {
-    if (entry.is_directory() && IsSequence(entry.path())) out.push_back(entry.path());
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
 
 // The object's visible pixels in frame `frame_id` (CV_8UC1, non-zero on the object): the
 // sequence's mask_visib image, else the model rendered at the true pose; empty when
@@ -166,12 +151,7 @@ int main(int argc, char** argv) {
   app.add_option("--json", args.json, "Write the figures here");
   CLI11_PARSE(app, argc, argv);
   try {
-    std::vector<fs::path> paths = SequencesIn(args.data_dir);
-    if (paths.empty()) UNSEEN_LOG_WARN("{}: no sequences found", args.data_dir);
-    std::stringstream extra(args.extra);
-    for (std::string dir; std::getline(extra, dir, ',');) {
-      for (const fs::path& p : SequencesIn(dir)) paths.push_back(p);
-    }
+    const std::vector<fs::path> paths = bench::BenchmarkSequences(args.data_dir, args.extra);
     nlohmann::json results = nlohmann::json::array();
     fmt::print("{:<28} {:>6} {:>6} {:>8} {:>7} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7}\n", "sequence",
                "frames", "judged", "selected", "right", "false", "IoU", "first", "1st ok", "ms",
