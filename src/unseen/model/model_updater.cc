@@ -106,9 +106,7 @@ std::optional<Mesh> ModelUpdater::AfterFrame(const Frame& frame, const Rigid3d& 
     ready = Collect(pending_.get());
   }
   if (options_.mode == ModelUpdateMode::kNone || pending_.valid() || ready) return ready;
-  if (frames_since_model_ < options_.every_frames || confidence < options_.min_confidence) {
-    return ready;
-  }
+  if (!DueAfter(frames_since_model_, confidence)) return ready;
   ++stats_.started;
   frames_since_model_ = 0;  // the next attempt after every_frames more, built or not
   if (!options_.asynchronous) {

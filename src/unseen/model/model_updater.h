@@ -76,9 +76,19 @@ class ModelUpdater {
   bool AfterTracked(const Frame& frame, const TrackResult& result, Tracker* tracker,
                     const cv::Mat& mask = cv::Mat());
 
+  // Whether the next AfterFrame at `confidence` starts a build (none running, enough frames
+  // since the last, confident enough): what only a build needs (a mask) is made then only.
+  bool BuildsNext(double confidence) const {
+    return options_.mode != ModelUpdateMode::kNone && !pending_.valid() &&
+           DueAfter(frames_since_model_ + 1, confidence);
+  }
+
   const ModelUpdateStats& stats() const { return stats_; }
 
  private:
+  bool DueAfter(int frames_since_model, double confidence) const {
+    return frames_since_model >= options_.every_frames && confidence >= options_.min_confidence;
+  }
   std::optional<Mesh> Collect(ModelBuild build);
   // Modeller::Build, then with kIncremental the fusion of its depth (on the build's thread:
   // only one build runs at a time).

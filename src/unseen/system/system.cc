@@ -105,7 +105,7 @@ bool System::Start(const Frame& frame, const RegionCandidate& region, const cv::
   return true;
 }
 
-cv::Mat System::MovingWithObject(const Frame& frame, const TrackResult& track) {
+cv::Mat System::MovingWithObject(const Frame& frame, const TrackResult& track, bool judge) {
   const std::optional<Rigid3d> previous = previous_tracked_;
   const bool tracked = track.status == TrackStatus::kTracking;
   previous_tracked_ = tracked ? std::optional<Rigid3d>(track.world_from_obj) : std::nullopt;
@@ -117,7 +117,7 @@ cv::Mat System::MovingWithObject(const Frame& frame, const TrackResult& track) {
   in.camera = camera.intrinsics;
   in.world_from_cam = camera.world_from_cam;
   in.time_s = frame.time_s;
-  if (tracked && previous) {
+  if (judge && tracked && previous) {
     in.world_from_obj = track.world_from_obj;
     in.previous_world_from_obj = *previous;
     if (!frame.depths.empty() && !frame.depths[reference_].empty()) {
@@ -191,7 +191,9 @@ SystemStep System::Step(const Frame& frame) {
     step.track = tracker_->Track(frame);
     if (updater_) {
       const cv::Mat moving =
-          options_.rebuild_from_tracked_motion ? MovingWithObject(frame, *step.track) : cv::Mat();
+          options_.rebuild_from_tracked_motion
+              ? MovingWithObject(frame, *step.track, updater_->BuildsNext(step.track->confidence))
+              : cv::Mat();
       updater_->AfterTracked(frame, *step.track, tracker_.get(), moving);
     }
     if (step.track->status == TrackStatus::kTracking) {

@@ -98,9 +98,9 @@ class System {
 
  private:
   // The pixels of the reference image moving with the tracked object (CV_8UC1), or empty
-  // when that cannot be told this frame. Called on every tracked frame (the filter keeps
-  // the previous image).
-  cv::Mat MovingWithObject(const Frame& frame, const TrackResult& track);
+  // when that cannot be told this frame or `judge` is false (no model build needs them).
+  // Called on every tracked frame (the filter keeps the previous image).
+  cv::Mat MovingWithObject(const Frame& frame, const TrackResult& track, bool judge);
   // Looks for the object in the selected region; true when tracking starts.
   bool Start(const Frame& frame, const RegionCandidate& region, const cv::Mat& labels,
              SystemStep* step);
