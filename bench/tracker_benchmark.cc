@@ -10,7 +10,7 @@
 // Prints a table per group and writes every row to a JSON file.
 //
 //   tracker_benchmark [--data DIR] [--scenes DIR] [--work DIR] [--json FILE]
-//                     [--groups dev,synthetic,...] [--max-frames N]
+//                     [--groups dev,synthetic,...] [--max-frames N] [--config tracker.yaml]
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
@@ -56,6 +56,9 @@ struct BenchArgs {
   std::string groups =
       "dev,heldout,modalities,synthetic,color,scale,speed,occlusion,linf,model_size";
   int max_frames = 0;  // 0 = all
+  // Tracker options (YAML) every run starts from instead of the defaults, so that a
+  // setting can be compared across all groups; empty: the defaults.
+  std::string config_path;
 };
 
 // One tracking run: a sequence, a model, options, a thread count.
@@ -216,7 +219,8 @@ std::vector<Run> PlanRuns(const BenchArgs& args, const std::vector<std::string>&
   if (!have_dev) UNSEEN_LOG_WARN("{} not found: development sequences skipped", args.data_dir);
   std::vector<Run> runs;
   auto add = [&](Run run) { runs.push_back(std::move(run)); };
-  const TrackerOptions defaults;
+  const TrackerOptions defaults =
+      args.config_path.empty() ? TrackerOptions() : LoadTrackerOptions(args.config_path);
 
   if (wanted("dev") && have_dev) {
     for (const fs::path& dir : DevSequences(args.data_dir)) {
@@ -381,6 +385,8 @@ int Main(int argc, char** argv) {
                  "Comma-separated: dev,heldout,modalities,synthetic,color,scale,speed,occlusion,linf,"
                  "model_size");
   app.add_option("--max-frames", args.max_frames, "Track at most N frames per run (0 = all)");
+  app.add_option("--config", args.config_path,
+                 "Tracker options (YAML) every run starts from (default: the built-in defaults)");
   CLI11_PARSE(app, argc, argv);
   SetVerbosity(1);
 

@@ -706,4 +706,11 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
   }
 }
 
+void PrepareForRendering(const Mesh& mesh) {
+  if (!mesh.HasUvTexture()) return;
+  for (const Material& m : mesh.materials) {
+    if (!m.texture.empty()) MipmapLevels(m.texture);
+  }
+}
+
 }  // namespace unseen

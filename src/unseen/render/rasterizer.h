@@ -85,4 +85,9 @@ struct RenderBuffers {
 void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_from_obj,
             const PixelRect& roi, const RenderOptions& options, RenderBuffers* out);
 
+// Builds now what the first Render of `mesh` would otherwise build (the mip-map levels of
+// its UV textures, tens of milliseconds for a 2 048 px texture), so that a tracker's first
+// frame costs what the others cost. Renders are the same with or without it.
+void PrepareForRendering(const Mesh& mesh);
+
 }  // namespace unseen

@@ -1,16 +1,17 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/render/rasterizer.h"
 
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <functional>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
 #include <vector>
 
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
-#include <opencv2/imgproc.hpp>
-
+#include "unseen/render/mipmap.h"
 #include "unseen/util/error.h"
 #include "unseen/util/testing.h"
 
@@ -366,6 +367,19 @@ TEST(Rasterizer, MinifiedTexturesAreSampledFromAMipmapLevel) {
   Render(quad, cam, Rigid3d(), cam.ImageRect(), options, &out);
   cv::minMaxLoc(out.color(cv::Rect(20, 10, 60, 60)).reshape(1), &lo, &hi);
   EXPECT_GT(hi - lo, 0.5);
+
+  // Preparing the model beforehand (its mip-maps built before the first render) renders
+  // exactly the same.
+  ClearMipmapCache();
+  PrepareForRendering(quad);
+  options.mipmaps = true;
+  RenderBuffers prepared;
+  Render(quad, cam, Rigid3d(), cam.ImageRect(), options, &prepared);
+  ClearMipmapCache();
+  Render(quad, cam, Rigid3d(), cam.ImageRect(), options, &out);
+  EXPECT_EQ(cv::norm(prepared.color, out.color, cv::NORM_INF), 0.0);
+  quad.materials.clear();
+  PrepareForRendering(quad);  // nothing to prepare without a texture
 }
 
 // Fan and jittered grid covering [x0, x1] x [y0, y1]: every pixel centre strictly inside

@@ -163,6 +163,7 @@ void Tracker::SetModel(Mesh model) {
     box_corners_[k] = Eigen::Vector3d(k & 1 ? hi.x() : lo.x(), k & 2 ? hi.y() : lo.y(),
                                       k & 4 ? hi.z() : lo.z());
   }
+  PrepareForRendering(model);
   given_model_ = std::make_shared<const Mesh>(std::move(model));
   StartWithGivenModel();
   reacquisition_.reset();
