@@ -502,7 +502,7 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
   for (int k = 0; k < static_cast<int>(scored.size()) && k < o.refine_candidates; ++k) {
     if (best.confidence >= options.failure.recover_confidence) break;
     if (scored[k].score < o.min_score) break;
-    TrackResult r = tracker_.Align(frame, scored[k].pose);
+    TrackResult r = tracker_.Align(frame, scored[k].pose, std::min(o.refine_levels, levels));
     times += r.summary.times;
     UNSEEN_LOG_DEBUG("refined candidate {}: conf {:.2f} at {}", scored[k].order, r.confidence,
                      r.world_from_obj.ToString());

@@ -114,6 +114,8 @@ void ReacquisitionOptions::Check() const {
                "reacquisition.score_levels {} must be in [1, 8]", score_levels);
   UNSEEN_CHECK(refine_candidates >= 0 && refine_candidates <= 100,
                "reacquisition.refine_candidates {} must be in [0, 100]", refine_candidates);
+  UNSEEN_CHECK(refine_levels >= 0 && refine_levels <= 8,
+               "reacquisition.refine_levels {} must be in [0, 8]", refine_levels);
   UNSEEN_CHECK(min_score >= 0.0 && min_score <= 1.0,
                "reacquisition.min_score {} must be in [0, 1]", min_score);
   UNSEEN_CHECK(doubtful_confidence >= 0.0 && doubtful_confidence <= 1.0,
@@ -279,6 +281,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"score_iterations", YamlField(&re.score_iterations)},
         {"score_levels", YamlField(&re.score_levels)},
         {"refine_candidates", YamlField(&re.refine_candidates)},
+        {"refine_levels", YamlField(&re.refine_levels)},
         {"min_score", YamlField(&re.min_score)},
         {"seed_when_doubtful", YamlField(&re.seed_when_doubtful)},
         {"doubtful_confidence", YamlField(&re.doubtful_confidence)},
