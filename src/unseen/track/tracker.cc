@@ -483,13 +483,25 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
         }
       });
       // Each modality's rows, per camera: pixel selection (4.8)-(4.15), (3.6) for the
-      // photometric one.
+      // photometric one. The modalities keep their rows per camera and share nothing, so
+      // every (camera, modality) pair is a job of its own: with one camera, the photometric
+      // selection runs beside the silhouette's and the depth's rows.
       photometric_.BeginRound(ncam);
       depth_.BeginRound(ncam);
       region_.BeginRound(ncam);
-      RunParallel(ncam, [&](int c) {
+      enum ModalityJob { kPhotometricJob, kDepthJob, kRegionJob, kModalityJobs };
+      jobs.clear();
+      for (int c = 0; c < ncam; ++c) {
+        const CameraWork& w = *work_[c];
+        if (!w.active || !w.virtual_ok) continue;
+        if (use_photometric_) jobs.push_back(kModalityJobs * c + kPhotometricJob);
+        if (use_depth && !frame.depths[c].empty()) jobs.push_back(kModalityJobs * c + kDepthJob);
+        if (options_.region.enabled) jobs.push_back(kModalityJobs * c + kRegionJob);
+      }
+      std::vector<double> job_ms(jobs.size(), 0.0);
+      RunParallel(static_cast<int>(jobs.size()), [&](int j) {
+        const int c = jobs[j] / kModalityJobs;
         CameraWork& w = *work_[c];
-        if (!w.active || !w.virtual_ok) return;
         Timer select_timer;
         ModalityRound round;
         round.camera = c;
@@ -508,11 +520,21 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
         if (use_depth && !frame.depths[c].empty()) round.measured_depth = &frame.depths[c];
         round.learn = level == 0 && !span.scoring;
         round.first_frame = learn_from_start_;
-        if (use_photometric_) photometric_.AddEquations(round);
-        depth_.AddEquations(round);  // rows only where the frame has depth
-        if (options_.region.enabled) region_.AddEquations(round);
-        w.times.select_ms += select_timer.ElapsedMilliseconds();
+        switch (jobs[j] % kModalityJobs) {
+          case kPhotometricJob:
+            photometric_.AddEquations(round);
+            break;
+          case kDepthJob:
+            depth_.AddEquations(round);
+            break;
+          default:
+            region_.AddEquations(round);
+        }
+        job_ms[j] = select_timer.ElapsedMilliseconds();
       });
+      for (size_t j = 0; j < jobs.size(); ++j) {
+        work_[jobs[j] / kModalityJobs]->times.select_ms += job_ms[j];
+      }
       const SelectionCounts counts = photometric_.counts();
       const RegionCounts region_counts = region_.counts();
 
