@@ -26,7 +26,12 @@ std::string ToString(DepthSourceKind kind);
 DepthSourceKind ParseDepthSourceKind(const std::string& text);
 
 struct PlaneSweepOptions {
-  int planes = 64;    // fronto-parallel planes, uniform in inverse depth
+  // Fronto-parallel planes, uniform in inverse depth: at most `planes`, and no more than
+  // make the farthest-seeing camera's match move `disparity_step_px` pixels from one plane
+  // to the next across the depth range (the sub-plane fit does the rest); 0: always
+  // `planes`.
+  int planes = 64;
+  double disparity_step_px = 0.0;
   int window_px = 7;  // side of the square window of the ZNCC cost
   // Cameras whose cost counts at each pixel: the best `best_share` of them, at least two
   // where there are (occlusion: a camera that sees something else there disagrees). All

@@ -20,10 +20,15 @@ using testing::RigScene;
 struct DepthCase {
   DepthSourceKind kind;
   int reference;
+  double disparity_step_px = 0.0;  // plane sweep: planes by disparity step (0: all 64)
 };
 
 std::string CaseName(const ::testing::TestParamInfo<DepthCase>& info) {
-  return ToString(info.param.kind) + "_ref" + std::to_string(info.param.reference);
+  std::string name = ToString(info.param.kind) + "_ref" + std::to_string(info.param.reference);
+  if (info.param.disparity_step_px > 0.0) {
+    name += "_step" + std::to_string(static_cast<int>(info.param.disparity_step_px)) + "px";
+  }
+  return name;
 }
 
 class DepthSources : public ::testing::TestWithParam<DepthCase> {
@@ -46,6 +51,7 @@ TEST_P(DepthSources, MeasureTheCubeAgainstTheTruth) {
   options.source = GetParam().kind;
   options.min_depth_m = 0.3;
   options.max_depth_m = 1.5;
+  options.plane_sweep.disparity_step_px = GetParam().disparity_step_px;
   const std::unique_ptr<DepthSource> source = MakeDepthSource(s.rig, ref, options);
   EXPECT_EQ(source->kind(), GetParam().kind);
   const cv::Mat& mask = s.object_masks[ref];
@@ -84,6 +90,7 @@ TEST_P(DepthSources, MeasureTheCubeAgainstTheTruth) {
 
 INSTANTIATE_TEST_SUITE_P(AllSources, DepthSources,
                          ::testing::Values(DepthCase{DepthSourceKind::kPlaneSweep, 0},
+                                           DepthCase{DepthSourceKind::kPlaneSweep, 0, 2.0},
                                            DepthCase{DepthSourceKind::kStereo, 0},
                                            DepthCase{DepthSourceKind::kStereo, 1},
                                            DepthCase{DepthSourceKind::kSensor, 0}),

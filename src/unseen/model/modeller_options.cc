@@ -36,6 +36,8 @@ DepthSourceKind ParseDepthSourceKind(const std::string& text) {
 
 void PlaneSweepOptions::Check() const {
   UNSEEN_CHECK(planes >= 4 && planes <= 1024, "plane_sweep.planes {} must be in [4, 1024]", planes);
+  UNSEEN_CHECK(disparity_step_px >= 0.0 && disparity_step_px <= 16.0,
+               "plane_sweep.disparity_step_px {} must be in [0, 16]", disparity_step_px);
   UNSEEN_CHECK(window_px >= 3 && window_px % 2 == 1 && window_px <= 31,
                "plane_sweep.window_px {} must be odd and in [3, 31]", window_px);
   UNSEEN_CHECK(best_share > 0.0 && best_share <= 1.0, "plane_sweep.best_share {} must be in (0, 1]",
@@ -191,6 +193,7 @@ ModellerOptions FromYaml(const YAML::Node& root, const std::string& what, Modell
         {"min_texturedness", YamlField(&d.min_texturedness)}}},
       {"plane_sweep",
        {{"planes", YamlField(&ps.planes)},
+        {"disparity_step_px", YamlField(&ps.disparity_step_px)},
         {"window_px", YamlField(&ps.window_px)},
         {"best_share", YamlField(&ps.best_share)},
         {"max_cost", YamlField(&ps.max_cost)},

@@ -235,7 +235,7 @@ TEST(ModellerOptionsYaml, ReadsEverySectionAndNamesWhatIsWrong) {
   const ModellerOptions o = ParseModellerOptions(
       "depth: {source: stereo, max_depth_m: 2.5}\n"
       "stereo: {num_disparities: 64, other_camera: right}\n"
-      "plane_sweep: {planes: 32}\n"
+      "plane_sweep: {planes: 32, disparity_step_px: 1.5}\n"
       "segmentation: {max_radius_m: 0.2, remove_support_plane: false}\n"
       "mesh: {cell_px: 8, contour_vertices: false}\n"
       "model: {origin_offset_m: 0.01}\n",
@@ -245,6 +245,7 @@ TEST(ModellerOptionsYaml, ReadsEverySectionAndNamesWhatIsWrong) {
   EXPECT_EQ(o.depth.stereo.num_disparities, 64);
   EXPECT_EQ(o.depth.stereo.other_camera, "right");
   EXPECT_EQ(o.depth.plane_sweep.planes, 32);
+  EXPECT_EQ(o.depth.plane_sweep.disparity_step_px, 1.5);
   EXPECT_EQ(o.segmentation.max_radius_m, 0.2);
   EXPECT_FALSE(o.segmentation.remove_support_plane);
   EXPECT_EQ(o.mesh.cell_px, 8);
@@ -263,6 +264,8 @@ TEST(ModellerOptionsYaml, ReadsEverySectionAndNamesWhatIsWrong) {
   EXPECT_NE(message("meshes: {}").find("meshes"), std::string::npos);
   EXPECT_NE(message("mesh: {cell_px: 1}").find("cell_px"), std::string::npos);
   EXPECT_NE(message("mesh: {cell_px: many}").find("bad.yaml"), std::string::npos);
+  EXPECT_NE(message("plane_sweep: {disparity_step_px: -1}").find("disparity_step_px"),
+            std::string::npos);
   EXPECT_THROW(LoadModellerOptions("/nonexistent/model.yaml"), Error);
 }
 

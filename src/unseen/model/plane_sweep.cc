@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "unseen/util/error.h"
+#include "unseen/util/logging.h"
 
 namespace unseen {
 namespace {
@@ -25,6 +26,27 @@ cv::Matx33d ToCv(const Eigen::Matrix3d& m) {
     for (int c = 0; c < 3; ++c) out(r, c) = m(r, c);
   }
   return out;
+}
+
+// The planes for depths [near, far] over region `r` of the reference camera: how far the
+// match of the region's centre moves across the range in the other cameras, in steps of
+// o.disparity_step_px, capped at o.planes.
+int PlaneCount(const Rig& rig, int reference, const std::vector<int>& others, const PixelRect& r,
+               double near, double far, const PlaneSweepOptions& o) {
+  if (!(o.disparity_step_px > 0.0)) return o.planes;
+  const RigCamera& ref = rig.cameras[reference];
+  const Eigen::Vector2d centre(0.5 * (r.x0 + r.x1 - 1), 0.5 * (r.y0 + r.y1 - 1));
+  double span_px = 0.0;
+  for (const int c : others) {
+    const RigCamera& cam = rig.cameras[c];
+    const Rigid3d other_from_ref = cam.cam_from_world() * ref.world_from_cam;
+    const Eigen::Vector3d a = other_from_ref * ref.intrinsics.Unproject(centre, near);
+    const Eigen::Vector3d b = other_from_ref * ref.intrinsics.Unproject(centre, far);
+    if (!(a.z() > 0.0 && b.z() > 0.0)) return o.planes;  // behind: no bound from this one
+    span_px = std::max(span_px, (cam.intrinsics.Project(a) - cam.intrinsics.Project(b)).norm());
+  }
+  const double needed = std::ceil(span_px / o.disparity_step_px) + 1.0;
+  return static_cast<int>(std::clamp(needed, 4.0, static_cast<double>(o.planes)));
 }
 
 }  // namespace
@@ -79,7 +101,9 @@ DepthMap PlaneSweepDepth::Extract(const Frame& frame, const PixelRect& roi, doub
   const cv::Mat var_r = Box(ref_w.mul(ref_w), o.window_px) - mean_r.mul(mean_r);
 
   // Plane k at inverse depth 1/far + k * step (k = 0: the farthest).
-  const int planes = o.planes;
+  const int planes = PlaneCount(rig_, reference_, others, r, near, far, o);
+  UNSEEN_LOG_DEBUG("plane sweep: {} planes over [{:.3f}, {:.3f}] m, {} cameras", planes, near, far,
+                   num_others + 1);
   const double inv_far = 1.0 / far;
   const double inv_step = (1.0 / near - inv_far) / (planes - 1);
   const Eigen::Matrix3d kref_inv = kref.K().inverse();
