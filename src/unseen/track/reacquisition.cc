@@ -127,6 +127,22 @@ CameraWindow PrepareWindow(const cv::Mat& image, const RigCamera& rig_camera,
   return w;
 }
 
+// Colour and coverage of `model` at `cam_from_obj` in `camera`, area-averaged from a 2x2
+// supersampled render; false when it covers no pixel.
+bool SupersampledRender(const Mesh& model, const PinholeCamera& camera, const Rigid3d& cam_from_obj,
+                        cv::Mat* color, cv::Mat* alpha) {
+  const PinholeCamera fine = camera.Scaled(0.5);
+  RenderBuffers buffers;
+  Render(model, fine, cam_from_obj, fine.ImageRect(), RenderOptions(), &buffers);
+  if (buffers.mask.empty() || cv::countNonZero(buffers.mask) == 0) return false;
+  const cv::Size size(camera.width, camera.height);
+  cv::resize(buffers.color, *color, size, 0, 0, cv::INTER_AREA);
+  cv::Mat coverage;
+  buffers.mask.convertTo(coverage, CV_32F, 1.0 / 255.0);
+  cv::resize(coverage, *alpha, size, 0, 0, cv::INTER_AREA);
+  return true;
+}
+
 // The model at `world_from_obj` matched in camera window `w`.
 struct CameraMatch {
   bool ok = false;
@@ -144,7 +160,8 @@ struct CameraMatch {
 
 CameraMatch MatchInWindow(const CameraWindow& w, const Mesh& model,
                           const Eigen::Vector3d& sphere_centre, const Rigid3d& world_from_obj,
-                          int level, int max_peaks, const PreprocessOptions& preprocess) {
+                          int level, int max_peaks, const PreprocessOptions& preprocess,
+                          CorrelationTemplateCache* templates) {
   CameraMatch m;
   if (!w.ok) return m;
   const Rigid3d cam_from_obj = w.cam_from_world * world_from_obj;
@@ -161,14 +178,12 @@ CameraMatch MatchInWindow(const CameraWindow& w, const Mesh& model,
   template_camera.width = template_camera.height = side;
   template_camera.cx -= ox;
   template_camera.cy -= oy;
-  const PinholeCamera fine = template_camera.Scaled(0.5);
-  RenderBuffers buffers;
-  Render(model, fine, cam_from_obj, fine.ImageRect(), RenderOptions(), &buffers);
-  if (buffers.mask.empty() || cv::countNonZero(buffers.mask) == 0) return m;
-  cv::Mat color, alpha, coverage;
-  cv::resize(buffers.color, color, cv::Size(side, side), 0, 0, cv::INTER_AREA);
-  buffers.mask.convertTo(coverage, CV_32F, 1.0 / 255.0);
-  cv::resize(coverage, alpha, cv::Size(side, side), 0, 0, cv::INTER_AREA);
+  cv::Mat color, alpha;
+  if (templates) {
+    if (!templates->Render(template_camera, cam_from_obj, &color, &alpha)) return m;
+  } else if (!SupersampledRender(model, template_camera, cam_from_obj, &color, &alpha)) {
+    return m;
+  }
   cv::Mat composite(side, side, CV_32FC3);
   for (int y = 0; y < side; ++y) {
     const float* a = alpha.ptr<float>(y);
@@ -200,19 +215,52 @@ CameraMatch MatchInWindow(const CameraWindow& w, const Mesh& model,
 
 }  // namespace
 
+void CorrelationTemplateCache::Bind(std::shared_ptr<const Mesh> model) {
+  UNSEEN_CHECK(model != nullptr, "CorrelationTemplateCache: no model");
+  if (model != model_) entries_.clear();
+  model_ = std::move(model);
+}
+
+bool CorrelationTemplateCache::Render(const PinholeCamera& camera, const Rigid3d& cam_from_obj,
+                                      cv::Mat* color, cv::Mat* coverage) {
+  UNSEEN_CHECK(model_ != nullptr, "CorrelationTemplateCache::Render before Bind");
+  auto same_camera = [&](const PinholeCamera& c) {
+    return c.width == camera.width && c.height == camera.height && c.fx == camera.fx &&
+           c.fy == camera.fy && c.cx == camera.cx && c.cy == camera.cy;
+  };
+  for (const Entry& e : entries_) {
+    if (same_camera(e.camera) && e.cam_from_obj.translation() == cam_from_obj.translation() &&
+        e.cam_from_obj.rotation().coeffs() == cam_from_obj.rotation().coeffs()) {
+      ++hits_;
+      *color = e.color;
+      *coverage = e.coverage;
+      return !e.color.empty();
+    }
+  }
+  ++misses_;
+  Entry e{camera, cam_from_obj, {}, {}};
+  if (!SupersampledRender(*model_, camera, cam_from_obj, &e.color, &e.coverage)) {
+    e.color.release();
+    e.coverage.release();
+  }
+  if (static_cast<int>(entries_.size()) >= kMaxEntries) entries_.erase(entries_.begin());
+  entries_.push_back(e);
+  *color = e.color;
+  *coverage = e.coverage;
+  return !e.color.empty();
+}
+
 int CorrelationLevel(double diameter_px, const ReacquisitionOptions& options) {
   if (!(diameter_px > options.seed_object_px)) return 0;
   return std::clamp(static_cast<int>(std::floor(std::log2(diameter_px / options.seed_object_px))),
                     0, 7);
 }
 
-std::vector<CorrelationSeed> FindCorrelationSeeds(const std::vector<cv::Mat>& images,
-                                                  const Rig& rig, const Mesh& model,
-                                                  const Eigen::Vector3d& sphere_centre,
-                                                  double sphere_radius,
-                                                  const std::vector<Rigid3d>& references,
-                                                  const ReacquisitionOptions& options,
-                                                  const PreprocessOptions& preprocess) {
+std::vector<CorrelationSeed> FindCorrelationSeeds(
+    const std::vector<cv::Mat>& images, const Rig& rig, const Mesh& model,
+    const Eigen::Vector3d& sphere_centre, double sphere_radius,
+    const std::vector<Rigid3d>& references, const ReacquisitionOptions& options,
+    const PreprocessOptions& preprocess, CorrelationTemplateCache* templates) {
   UNSEEN_CHECK(static_cast<int>(images.size()) == rig.size(),
                "FindCorrelationSeeds: {} images for a rig of {} cameras", images.size(),
                rig.size());
@@ -241,7 +289,7 @@ std::vector<CorrelationSeed> FindCorrelationSeeds(const std::vector<cv::Mat>& im
     std::vector<CameraMatch> matches;
     for (int c = 0; c < rig.size(); ++c) {
       matches.push_back(MatchInWindow(windows[c], model, sphere_centre, reference, level,
-                                      options.max_seeds, preprocess));
+                                      options.max_seeds, preprocess, templates));
     }
     auto seed_from = [&](const std::vector<std::pair<int, const Peak*>>& used) {
       // Weighted least squares on the world displacement d: rows 0 and 1 of each
@@ -412,12 +460,15 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
     for (const Rigid3d& p : TurnedAboutCentre(last_good, sphere_centre_, o.rotation_deg)) {
       orientations.push_back(p);
     }
-    seeds = FindCorrelationSeeds(images, tracker_.rig(), tracker_.model(), sphere_centre_,
-                                 sphere_radius_, orientations, o, options.preprocess);
+    // The same last good pose in every lost frame: its templates are rendered once.
+    templates_.Bind(tracker_.shared_model());
+    seeds = FindCorrelationSeeds(images, tracker_.rig(), templates_.model(), sphere_centre_,
+                                 sphere_radius_, orientations, o, options.preprocess, &templates_);
   }
   const double correlation_ms = timer.ElapsedMilliseconds();
   times.preprocess_ms += correlation_ms;
-  UNSEEN_LOG_DEBUG("correlation: {} seeds in {:.1f} ms", seeds.size(), correlation_ms);
+  UNSEEN_LOG_DEBUG("correlation: {} seeds in {:.1f} ms (template renders reused {}, made {})",
+                   seeds.size(), correlation_ms, templates_.hits(), templates_.misses());
   for (const CorrelationSeed& seed : seeds) {
     UNSEEN_LOG_DEBUG("correlation seed: shift {:.1f} px at level {}, ncc {:.2f}: {}",
                      seed.max_shift_px, seed.level, seed.score, seed.world_from_obj.ToString());

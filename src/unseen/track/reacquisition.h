@@ -16,9 +16,9 @@
 // Options: ReacquisitionOptions (tracker_options.h).
 #pragma once
 
-#include <vector>
-
+#include <memory>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "unseen/camera/camera.h"
 #include "unseen/geometry/rigid3.h"
@@ -39,6 +39,34 @@ struct CorrelationSeed {
   std::vector<Eigen::Vector2d> shift_px;
   double max_shift_px = 0.0;  // largest |shift_px| over the cameras used
   int reference_index = 0;    // which of the reference poses was matched
+};
+
+// Renders of the model kept between correlations: while the object is lost, the last good
+// pose and its turns are correlated anew in every frame, seen from the same cameras, so
+// their templates' renders repeat. Holds up to kMaxEntries renders of one model.
+class CorrelationTemplateCache {
+ public:
+  static constexpr int kMaxEntries = 32;
+  // The model the renders are of; a different one empties the cache.
+  void Bind(std::shared_ptr<const Mesh> model);
+  const Mesh& model() const { return *model_; }
+  // The colour (CV_32FC3) and coverage (CV_32FC1) of the model at `cam_from_obj` in
+  // `camera`, area-averaged from a 2x2 supersampled render: from the cache when the same
+  // pose and camera were rendered before. Returns false when the model covers no pixel.
+  bool Render(const PinholeCamera& camera, const Rigid3d& cam_from_obj, cv::Mat* color,
+              cv::Mat* coverage);
+  int hits() const { return hits_; }
+  int misses() const { return misses_; }
+
+ private:
+  struct Entry {
+    PinholeCamera camera;
+    Rigid3d cam_from_obj;
+    cv::Mat color, coverage;  // empty: the model covers no pixel
+  };
+  std::shared_ptr<const Mesh> model_;
+  std::vector<Entry> entries_;  // oldest first
+  int hits_ = 0, misses_ = 0;
 };
 
 // The pyramid level of the correlation for an object whose bounding sphere is
@@ -64,14 +92,13 @@ std::vector<CorrelationSeed> FindCorrelationSeeds(const std::vector<cv::Mat>& im
                                                   const PreprocessOptions& preprocess);
 // The same for several orientations of the object about its centre (the first's centre
 // sets the level and the search window): the options.max_seeds best seeds over all
-// references. An orientation closer to the object's matches it better.
-std::vector<CorrelationSeed> FindCorrelationSeeds(const std::vector<cv::Mat>& images,
-                                                  const Rig& rig, const Mesh& model,
-                                                  const Eigen::Vector3d& sphere_centre,
-                                                  double sphere_radius,
-                                                  const std::vector<Rigid3d>& references,
-                                                  const ReacquisitionOptions& options,
-                                                  const PreprocessOptions& preprocess);
+// references. An orientation closer to the object's matches it better. With `templates`
+// (bound to `model`), the templates' renders come from it when they repeat.
+std::vector<CorrelationSeed> FindCorrelationSeeds(
+    const std::vector<cv::Mat>& images, const Rig& rig, const Mesh& model,
+    const Eigen::Vector3d& sphere_centre, double sphere_radius,
+    const std::vector<Rigid3d>& references, const ReacquisitionOptions& options,
+    const PreprocessOptions& preprocess, CorrelationTemplateCache* templates = nullptr);
 
 // `pose` turned by `rotation` (world frame) about the object's point `centre_in_obj`,
 // which stays where it is.
@@ -135,6 +162,7 @@ class Reacquisition {
                           const Rigid3d& start);
 
   Tracker& tracker_;
+  CorrelationTemplateCache templates_;
   Eigen::Vector3d sphere_centre_ = Eigen::Vector3d::Zero();
   double sphere_radius_ = 0.0;
 };

@@ -6,14 +6,16 @@
 // view and came back.
 #include "unseen/track/reacquisition.h"
 
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
 #include <opencv2/imgproc.hpp>
 
 #include "unseen/mesh/primitives.h"
 #include "unseen/render/rasterizer.h"
 #include "unseen/track/test_scene.h"
+#include "unseen/util/error.h"
 
 namespace unseen {
 namespace {
@@ -107,6 +109,43 @@ TEST_F(Reacquire, CorrelationFindsAKnownShiftDespiteAGainChange) {
     EXPECT_LT(Difference(s.world_from_obj, truth).translation, 1.5 * px_m);
     EXPECT_DOUBLE_EQ(s.world_from_obj.translation().z(), reference.translation().z());
   }
+}
+
+// While lost, the same reference poses are correlated frame after frame: their templates
+// are rendered once, and the seeds are those found without the cache.
+TEST_F(Reacquire, RepeatedCorrelationsReuseTheirTemplateRenders) {
+  const Rigid3d truth = CubePose();
+  const Rigid3d reference(truth.rotation(), truth.translation() + Eigen::Vector3d(0.12, 0.05, 0.0));
+  std::vector<Rigid3d> references{reference};
+  for (const Rigid3d& p : TurnedAboutCentre(reference, centre_, 25.0)) references.push_back(p);
+  const ReacquisitionOptions options;
+  const PreprocessOptions preprocess;
+  auto model = std::make_shared<const Mesh>(cube_);
+  CorrelationTemplateCache templates;
+  templates.Bind(model);
+  const std::vector<CorrelationSeed> plain = FindCorrelationSeeds(
+      {Image(truth)}, rig_, *model, centre_, radius_, references, options, preprocess);
+  ASSERT_FALSE(plain.empty());
+  for (int frame = 0; frame < 3; ++frame) {
+    const std::vector<CorrelationSeed> cached =
+        FindCorrelationSeeds({Image(truth)}, rig_, templates.model(), centre_, radius_, references,
+                             options, preprocess, &templates);
+    ASSERT_EQ(cached.size(), plain.size());
+    for (size_t k = 0; k < plain.size(); ++k) {
+      EXPECT_EQ(cached[k].reference_index, plain[k].reference_index);
+      EXPECT_DOUBLE_EQ(cached[k].score, plain[k].score);
+      EXPECT_TRUE(cached[k].world_from_obj.translation().isApprox(
+          plain[k].world_from_obj.translation(), 1e-12));
+    }
+  }
+  EXPECT_EQ(templates.misses(), static_cast<int>(references.size()));
+  EXPECT_EQ(templates.hits(), 2 * static_cast<int>(references.size()));
+  // Another model (a new appearance) renders anew.
+  templates.Bind(std::make_shared<const Mesh>(cube_));
+  FindCorrelationSeeds({Image(truth)}, rig_, templates.model(), centre_, radius_, references,
+                       options, preprocess, &templates);
+  EXPECT_EQ(templates.misses(), 2 * static_cast<int>(references.size()));
+  EXPECT_THROW(templates.Bind(nullptr), Error);
 }
 
 TEST_F(Reacquire, CorrelationWithTwoCamerasRecoversTheThreeDShift) {

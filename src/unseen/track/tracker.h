@@ -151,6 +151,9 @@ class Tracker {
   // The model as rendered: the given one or, with LiveAppearanceOptions, the given one with
   // projective textures from the last confidently tracked frame.
   const Mesh& model() const { return *model_; }
+  // The same, shared: a Mesh is never changed once rendered (a new appearance is a new
+  // Mesh), so a holder of this pointer may cache what it rendered of it.
+  std::shared_ptr<const Mesh> shared_model() const { return model_; }
   // The model as given (constructor, SetModel), without live textures.
   const Mesh& given_model() const { return *given_model_; }
   const TrackerOptions& options() const { return options_; }
