@@ -5,10 +5,10 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
-
 #include <opencv2/imgproc.hpp>
 
 #include "unseen/image/filters.h"
+#include "unseen/image/template_matching.h"
 #include "unseen/render/rasterizer.h"
 #include "unseen/util/error.h"
 #include "unseen/util/logging.h"
@@ -85,6 +85,8 @@ struct CameraWindow {
   PixelRect padded;        // level pixels the feature map covers (may exceed the image)
   cv::Mat feature;         // gradient magnitude over `padded`, 0 outside the image
   cv::Scalar fill;         // mean colour of the window (the templates' background)
+  // Correlates templates with `feature`, its transforms made once for all of them.
+  std::shared_ptr<const MaskedTemplateMatcher> matcher;
 };
 
 CameraWindow PrepareWindow(const cv::Mat& image, const RigCamera& rig_camera,
@@ -123,6 +125,7 @@ CameraWindow PrepareWindow(const cv::Mat& image, const RigCamera& rig_camera,
   cv::copyMakeBorder(GradientMagnitude(window, preprocess, level), w.feature,
                      inside.y0 - w.padded.y0, w.padded.y1 - inside.y1, inside.x0 - w.padded.x0,
                      w.padded.x1 - inside.x1, cv::BORDER_CONSTANT, cv::Scalar(0));
+  w.matcher = std::make_shared<const MaskedTemplateMatcher>(w.feature, cv::Size(side, side));
   w.ok = true;
   return w;
 }
@@ -201,12 +204,8 @@ CameraMatch MatchInWindow(const CameraWindow& w, const Mesh& model,
   const int edge = static_cast<int>(std::ceil(preprocess.blur_sigma_px)) + 1;
   cv::dilate(mask, mask,
              cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * edge + 1, 2 * edge + 1)));
-  cv::Mat ncc;
-  cv::matchTemplate(w.feature, template_feature, ncc, cv::TM_CCOEFF_NORMED, mask);
-  // Positions over a featureless window have no defined correlation.
-  cv::patchNaNs(ncc, -1.0);
-  cv::threshold(ncc, ncc, 1.0, 1.0, cv::THRESH_TRUNC);
-  m.peaks = FindPeaks(ncc, max_peaks, w.radius_px);
+  // Zero-mean normalised within the mask; -1 over a featureless part of the window.
+  m.peaks = FindPeaks(w.matcher->Match(template_feature, mask), max_peaks, w.radius_px);
   for (Peak& p : m.peaks) p.position += Eigen::Vector2d(w.padded.x0, w.padded.y0);
   m.reference_position = Eigen::Vector2d(ox, oy);
   m.ok = !m.peaks.empty();

@@ -1,0 +1,96 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+#include "unseen/image/template_matching.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+// `m` (single channel) converted to CV_64F in the top-left corner of a zero image of `size`,
+// transformed (CCS-packed spectrum; only its first `nonzero_rows` rows are non-zero).
+cv::Mat PaddedSpectrum(const cv::Mat& m, cv::Size size) {
+  cv::Mat padded = cv::Mat::zeros(size, CV_64FC1);
+  m.convertTo(padded(cv::Rect(0, 0, m.cols, m.rows)), CV_64F);
+  cv::Mat spectrum;
+  cv::dft(padded, spectrum, 0, m.rows);
+  return spectrum;
+}
+
+// The real correlation whose spectrum is a * conj(b), its first `rows` rows.
+cv::Mat Correlation(const cv::Mat& a, const cv::Mat& b, int rows) {
+  cv::Mat product, out;
+  cv::mulSpectrums(a, b, product, 0, /*conjB=*/true);
+  cv::dft(product, out, cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT, rows);
+  return out;
+}
+
+}  // namespace
+
+MaskedTemplateMatcher::MaskedTemplateMatcher(const cv::Mat& image, cv::Size template_size)
+    : image_size_(image.size()), template_size_(template_size) {
+  UNSEEN_CHECK(!image.empty() && image.channels() == 1 &&
+                   (image.depth() == CV_32F || image.depth() == CV_64F),
+               "MaskedTemplateMatcher: the image must be non-empty CV_32FC1 or CV_64FC1 (type {})",
+               image.type());
+  UNSEEN_CHECK(template_size.width >= 1 && template_size.height >= 1 &&
+                   template_size.width <= image.cols && template_size.height <= image.rows,
+               "MaskedTemplateMatcher: template {}x{} does not fit the {}x{} image",
+               template_size.width, template_size.height, image.cols, image.rows);
+  // Offsets u of the valid range and template pixels x reach u + x <= size - 1: a DFT of
+  // the image's own size does not wrap them around.
+  dft_size_ = cv::Size(cv::getOptimalDFTSize(image.cols), cv::getOptimalDFTSize(image.rows));
+  cv::Mat f;
+  image.convertTo(f, CV_64F);
+  image_spectrum_ = PaddedSpectrum(f, dft_size_);
+  squares_spectrum_ = PaddedSpectrum(f.mul(f), dft_size_);
+}
+
+cv::Mat MaskedTemplateMatcher::Match(const cv::Mat& templ, const cv::Mat& mask) const {
+  UNSEEN_CHECK(templ.size() == template_size_ && templ.channels() == 1 &&
+                   (templ.depth() == CV_32F || templ.depth() == CV_64F),
+               "MaskedTemplateMatcher::Match: the template must be CV_32FC1 or CV_64FC1 of "
+               "{}x{} (type {}, {}x{})",
+               template_size_.width, template_size_.height, templ.type(), templ.cols, templ.rows);
+  UNSEEN_CHECK(mask.size() == template_size_ && mask.type() == CV_8UC1,
+               "MaskedTemplateMatcher::Match: the mask must be CV_8UC1 of {}x{} (type {}, {}x{})",
+               template_size_.width, template_size_.height, mask.type(), mask.cols, mask.rows);
+  const int rows = image_size_.height - template_size_.height + 1;
+  const int cols = image_size_.width - template_size_.width + 1;
+  cv::Mat scores(rows, cols, CV_32FC1, cv::Scalar(-1.0f));
+  cv::Mat m;
+  cv::compare(mask, 0, m, cv::CMP_GT);
+  m.convertTo(m, CV_64F, 1.0 / 255.0);
+  const double n = cv::sum(m)[0];
+  if (n < 1.0) return scores;
+  cv::Mat t;
+  templ.convertTo(t, CV_64F);
+  const double mean = cv::sum(t.mul(m))[0] / n;
+  const cv::Mat centred = (t - mean).mul(m);
+  const double centred_energy = cv::sum(centred.mul(centred))[0];
+  if (!(centred_energy > 1e-20)) return scores;
+
+  const cv::Mat mask_spectrum = PaddedSpectrum(m, dft_size_);
+  const cv::Mat cross = Correlation(image_spectrum_, PaddedSpectrum(centred, dft_size_), rows);
+  const cv::Mat sums = Correlation(image_spectrum_, mask_spectrum, rows);
+  const cv::Mat squares = Correlation(squares_spectrum_, mask_spectrum, rows);
+  for (int y = 0; y < rows; ++y) {
+    const double* c = cross.ptr<double>(y);
+    const double* s = sums.ptr<double>(y);
+    const double* q = squares.ptr<double>(y);
+    float* out = scores.ptr<float>(y);
+    for (int x = 0; x < cols; ++x) {
+      const double variance = q[x] - s[x] * s[x] / n;
+      const double denominator = variance * centred_energy;
+      // Relative to the squares' scale: below it the variance is the transforms' rounding.
+      if (!(denominator > 1e-12 * std::max(q[x], 1e-12) * centred_energy)) continue;
+      out[x] = static_cast<float>(std::clamp(c[x] / std::sqrt(denominator), -1.0, 1.0));
+    }
+  }
+  return scores;
+}
+
+}  // namespace unseen
