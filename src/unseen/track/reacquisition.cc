@@ -238,10 +238,8 @@ bool CorrelationTemplateCache::Render(const PinholeCamera& camera, const Rigid3d
   }
   ++misses_;
   Entry e{camera, cam_from_obj, {}, {}};
-  if (!SupersampledRender(*model_, camera, cam_from_obj, &e.color, &e.coverage)) {
-    e.color.release();
-    e.coverage.release();
-  }
+  // Left empty when the model covers no pixel: remembered as such.
+  SupersampledRender(*model_, camera, cam_from_obj, &e.color, &e.coverage);
   if (static_cast<int>(entries_.size()) >= kMaxEntries) entries_.erase(entries_.begin());
   entries_.push_back(e);
   *color = e.color;
