@@ -57,6 +57,25 @@ std::string NearestCandidate(const std::vector<Rigid3d>& candidates, const Rigid
                      nearest.rotation_rad * 180.0 / M_PI);
 }
 
+// Where the first view within 15 degrees of the truth ranks among all views, and its
+// scores against the best view's (for -v: whether the view scoring or the alignment failed).
+std::string TrueViewRank(const ViewBank& views, const Frame& frame, const RigCamera& rig_camera,
+                         int camera, const PixelRect& box, const Rigid3d& truth) {
+  const std::vector<ViewMatch> all = views.Match(frame.images[camera], box, views.size(), 0.0);
+  for (int rank = 0; rank < static_cast<int>(all.size()); ++rank) {
+    const Rigid3d pose =
+        rig_camera.world_from_cam * views.CamFromObj(all[rank], rig_camera.intrinsics, box);
+    if (Difference(truth, pose).rotation_rad * 180.0 / M_PI < 15.0) {
+      return fmt::format(
+          "true view rank {} (score {:.2f} = app {:.2f} sil {:.2f}; best {:.2f} = "
+          "app {:.2f} sil {:.2f})",
+          rank, all[rank].score, all[rank].appearance, all[rank].silhouette, all[0].score,
+          all[0].appearance, all[0].silhouette);
+    }
+  }
+  return "no view within 15 deg";
+}
+
 SequenceFigures Run(const fs::path& path, const Args& args, bool verbose) {
   const int every = args.every;
   SequenceFigures fig;
@@ -99,9 +118,10 @@ SequenceFigures Run(const fs::path& path, const Args& args, bool verbose) {
       fig.sum_r_deg += d.rotation_rad * 180.0 / M_PI;
     }
     if (verbose) {
-      UNSEEN_LOG_INFO("{} frame {}: {}; error {:.1f} mm {:.1f} deg; {}", fig.name, i,
+      UNSEEN_LOG_INFO("{} frame {}: {}; error {:.1f} mm {:.1f} deg; {}; {}", fig.name, i,
                       r.BriefReport(), 1e3 * d.translation, d.rotation_rad * 180.0 / M_PI,
-                      NearestCandidate(poser.Candidates(frame, camera, box), *truth));
+                      NearestCandidate(poser.Candidates(frame, camera, box), *truth),
+                      TrueViewRank(poser.views(), frame, rig_camera, camera, box, *truth));
     }
   }
   return fig;
@@ -121,6 +141,10 @@ int main(int argc, char** argv) {
   app.add_option("--patch", args.pose.views.patch_px, "Patch side, pixels");
   app.add_option("--silhouette-weight", args.pose.views.silhouette_weight,
                  "Weight of the silhouette cue");
+  app.add_option("--appearance-step", args.pose.views.appearance_step,
+                 "Grey difference counted as a full step, times the box's mean difference");
+  app.add_option("--gradient-saturation", args.pose.views.gradient_saturation,
+                 "Gradient magnitude where the silhouette cue saturates, times the mean");
   app.add_option("--candidates", args.pose.max_candidates, "Start poses tracked per start");
   app.add_option("--separation", args.pose.min_separation_deg,
                  "Least angle between two start poses, degrees");

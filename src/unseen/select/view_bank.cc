@@ -18,6 +18,9 @@ constexpr double kPi = 3.14159265358979323846;
 // render's half side.
 constexpr double kRenderDistanceRadii = 10.0;
 constexpr double kSphereShareOfHalfSide = 0.9;
+// A step between neighbouring grey levels of a view's unshaded render that counts fully
+// (grey in [0, 1]); smaller steps count in proportion, so flat texture says little.
+constexpr float kViewFullStepGrey = 0.02f;
 
 // Centre (pixel-centre convention) and side of the square around `box`.
 Eigen::Vector2d BoxCentre(const PixelRect& box) {
@@ -83,6 +86,40 @@ cv::Mat TurnedAboutAxis(const cv::Mat& image, double angle, const Eigen::Vector2
   return turned;
 }
 
+// The steps of `grey` (one channel, float) to each pixel's right and downward neighbour,
+// divided by `full_step` and clipped to [-1, 1]; where `inside` (CV_8U, optional) is given,
+// only between two pixels inside it. Zero elsewhere, and in the last column / row.
+void SoftSteps(const cv::Mat& grey, float full_step, const cv::Mat& inside, cv::Mat* right,
+               cv::Mat* down) {
+  right->create(grey.size(), CV_32FC1);
+  down->create(grey.size(), CV_32FC1);
+  right->setTo(0);
+  down->setTo(0);
+  const auto in = [&](int y, int x) { return inside.empty() || inside.at<uint8_t>(y, x) != 0; };
+  for (int y = 0; y < grey.rows; ++y) {
+    for (int x = 0; x < grey.cols; ++x) {
+      if (!in(y, x)) continue;
+      const float here = grey.at<float>(y, x);
+      if (x + 1 < grey.cols && in(y, x + 1)) {
+        right->at<float>(y, x) =
+            std::clamp((grey.at<float>(y, x + 1) - here) / full_step, -1.f, 1.f);
+      }
+      if (y + 1 < grey.rows && in(y + 1, x)) {
+        down->at<float>(y, x) =
+            std::clamp((grey.at<float>(y + 1, x) - here) / full_step, -1.f, 1.f);
+      }
+    }
+  }
+}
+
+// The mean absolute step between neighbouring pixels (right and downward) of `grey`.
+double MeanStep(const cv::Mat& grey) {
+  const cv::Mat right = grey.colRange(1, grey.cols) - grey.colRange(0, grey.cols - 1);
+  const cv::Mat down = grey.rowRange(1, grey.rows) - grey.rowRange(0, grey.rows - 1);
+  return (cv::norm(right, cv::NORM_L1) + cv::norm(down, cv::NORM_L1)) /
+         static_cast<double>(right.total() + down.total());
+}
+
 // A continuous float patch as a column vector.
 Eigen::Map<const Eigen::VectorXf> AsVector(const cv::Mat& patch) {
   return {patch.ptr<float>(), static_cast<Eigen::Index>(patch.total())};
@@ -108,6 +145,10 @@ void ViewBankOptions::Check() const {
                "view bank: render_px {} not in [patch_px = {}, 1024]", render_px, patch_px);
   UNSEEN_CHECK(silhouette_weight >= 0.0 && silhouette_weight <= 1.0,
                "view bank: silhouette_weight {} not in [0, 1]", silhouette_weight);
+  UNSEEN_CHECK(appearance_step > 0.0 && appearance_step <= 100.0,
+               "view bank: appearance_step {} not in (0, 100]", appearance_step);
+  UNSEEN_CHECK(gradient_saturation > 0.0 && gradient_saturation <= 100.0,
+               "view bank: gradient_saturation {} not in (0, 100]", gradient_saturation);
 }
 
 std::vector<Eigen::Vector3d> FibonacciSphere(int n) {
@@ -139,7 +180,7 @@ ViewBank::ViewBank(const Mesh& model, const ViewBankOptions& options) : options_
 
   const int p = options_.patch_px;
   const int max_views = options_.num_directions * options_.num_rolls;
-  for (ViewRows* m : {&appearance_, &mask_, &outline_xx_, &outline_xy_, &outline_yy_}) {
+  for (ViewRows* m : {&step_right_, &step_down_, &outline_xx_, &outline_xy_, &outline_yy_}) {
     m->resize(max_views, p * p);
   }
   views_.reserve(max_views);
@@ -172,23 +213,16 @@ ViewBank::ViewBank(const Mesh& model, const ViewBankOptions& options) : options_
       view.side_px = BoxSide(box);
       views_.push_back(view);
 
-      // Appearance: zero mean and unit norm inside the silhouette.
+      // Appearance: the steps inside the silhouette, summing to 1 in absolute value. A
+      // uniform view (no texture) carries no appearance: all zero, score 0.
       cv::Mat inside;
       cv::compare(mask_patch, 0.5, inside, cv::CMP_GT);
-      const double area = cv::countNonZero(inside);
-      cv::Mat normalised(p, p, CV_32FC1, cv::Scalar(0));
-      if (area > 0) {
-        const double mean = cv::mean(grey_patch, inside)[0];
-        cv::subtract(grey_patch, mean, normalised, inside);
-        const double norm = cv::norm(normalised);
-        // A uniform view (no texture) carries no appearance: all zero, NCC 0.
-        normalised = norm > 1e-4 * std::sqrt(area) ? normalised / norm : normalised * 0.0;
-      }
-      StoreRow(normalised, row, &appearance_);
-      cv::Mat binary;
-      inside.convertTo(binary, CV_32F, 1.0 / 255.0);
-      StoreRow(binary, row, &mask_);
-      mask_area_.push_back(static_cast<float>(area));
+      cv::Mat right, down;
+      SoftSteps(grey_patch, kViewFullStepGrey, inside, &right, &down);
+      const double total = cv::norm(right, cv::NORM_L1) + cv::norm(down, cv::NORM_L1);
+      const double scale = total >= 1.0 ? 1.0 / total : 0.0;
+      StoreRow(right * scale, row, &step_right_);
+      StoreRow(down * scale, row, &step_down_);
 
       // Outline: the gradient of the silhouette, |g| n n^T = g g^T / |g|.
       cv::Mat gx, gy;
@@ -204,7 +238,7 @@ ViewBank::ViewBank(const Mesh& model, const ViewBankOptions& options) : options_
     }
   }
   UNSEEN_CHECK(!views_.empty(), "view bank: the model covers no pixel from any direction");
-  for (ViewRows* m : {&appearance_, &mask_, &outline_xx_, &outline_xy_, &outline_yy_}) {
+  for (ViewRows* m : {&step_right_, &step_down_, &outline_xx_, &outline_xy_, &outline_yy_}) {
     m->conservativeResize(size(), Eigen::NoChange);
   }
 }
@@ -217,17 +251,24 @@ std::vector<ViewMatch> ViewBank::Match(const cv::Mat& image, const PixelRect& bo
                box.x1, box.y0, box.y1);
   const int p = options_.patch_px;
   const cv::Mat x = CutSquare(Grey(image), box, p);
-  cv::Mat gx, gy;
+  cv::Mat right, down;
+  SoftSteps(x, static_cast<float>(options_.appearance_step * MeanStep(x)) + 1e-6f, cv::Mat(),
+            &right, &down);
+  cv::Mat gx, gy, magnitude;
   cv::Sobel(x, gx, CV_32F, 1, 0, 3, 0.25, 0, cv::BORDER_REPLICATE);
   cv::Sobel(x, gy, CV_32F, 0, 1, 3, 0.25, 0, cv::BORDER_REPLICATE);
+  cv::magnitude(gx, gy, magnitude);
+  const double saturation = options_.gradient_saturation * cv::mean(magnitude)[0] + 1e-9;
+  const cv::Mat damping = 1.0 / (magnitude / saturation + 1.0);
+  gx = gx.mul(damping);
+  gy = gy.mul(damping);
   const double energy_per_px = (cv::sum(gx.mul(gx))[0] + cv::sum(gy.mul(gy))[0]) / (p * p);
 
   // Every view at once: one matrix-vector product per term.
-  const cv::Mat inputs[6] = {x, x.mul(x), x, gx.mul(gx), gx.mul(gy), gy.mul(gy)};
-  const ViewRows* rows[6] = {&appearance_, &mask_,       &mask_,
-                             &outline_xx_, &outline_xy_, &outline_yy_};
-  Eigen::VectorXf dots[6];
-  for (int t = 0; t < 6; ++t) dots[t].noalias() = *rows[t] * AsVector(inputs[t]);
+  const cv::Mat inputs[5] = {right, down, gx.mul(gx), gx.mul(gy), gy.mul(gy)};
+  const ViewRows* rows[5] = {&step_right_, &step_down_, &outline_xx_, &outline_xy_, &outline_yy_};
+  Eigen::VectorXf dots[5];
+  for (int t = 0; t < 5; ++t) dots[t].noalias() = *rows[t] * AsVector(inputs[t]);
 
   const double w = options_.silhouette_weight;
   std::vector<ViewMatch> all(size());
@@ -235,11 +276,8 @@ std::vector<ViewMatch> ViewBank::Match(const cv::Mat& image, const PixelRect& bo
     ViewMatch& m = all[v];
     m.view = v;
     m.cam_from_obj_rotation = views_[v].cam_from_obj_rotation;
-    const double area = mask_area_[v];
-    const double sum_x = dots[2](v), sum_xx = dots[1](v);
-    const double spread = area > 0 ? sum_xx - sum_x * sum_x / area : 0.0;
-    m.appearance = spread > 1e-8 ? dots[0](v) / std::sqrt(spread) : 0.0;
-    const double across = dots[3](v) + dots[4](v) + dots[5](v);
+    m.appearance = dots[0](v) + dots[1](v);
+    const double across = dots[2](v) + dots[3](v) + dots[4](v);
     const double expected = outline_weight_[v] * energy_per_px;
     const double ratio = expected > 1e-12 ? across / expected : 0.0;
     // An isotropic gradient field gives (g . n)^2 = |g|^2 / 2 on average: ratio 0.5.
