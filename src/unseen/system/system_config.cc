@@ -70,6 +70,8 @@ YamlSection KnownPoseSection(KnownModelPoseOptions* o) {
           {"patch_px", YamlField(&o->views.patch_px)},
           {"render_px", YamlField(&o->views.render_px)},
           {"silhouette_weight", YamlField(&o->views.silhouette_weight)},
+          {"appearance_step", YamlField(&o->views.appearance_step)},
+          {"gradient_saturation", YamlField(&o->views.gradient_saturation)},
           {"max_candidates", YamlField(&o->max_candidates)},
           {"min_separation_deg", YamlField(&o->min_separation_deg)},
           {"min_confidence", YamlField(&o->min_confidence)},

@@ -45,7 +45,7 @@ filters:
   - type: motion
 segmentation: {block_px: 16, remove_dominant_motion: true}
 selection: {min_area_px: 300, rank_by_total_interest: false}
-known_pose: {max_candidates: 5, rolls: 8}
+known_pose: {max_candidates: 5, rolls: 8, gradient_saturation: 0.5}
 update: {mode: periodic, every_frames: 12, asynchronous: false}
 )",
                                                 "cfg.yaml");
@@ -63,6 +63,7 @@ update: {mode: periodic, every_frames: 12, asynchronous: false}
   EXPECT_FALSE(config.system.selection.rank_by_total_interest);
   EXPECT_EQ(config.system.known_pose.max_candidates, 5);
   EXPECT_EQ(config.system.known_pose.views.num_rolls, 8);
+  EXPECT_DOUBLE_EQ(config.system.known_pose.views.gradient_saturation, 0.5);
   EXPECT_EQ(config.system.update.mode, ModelUpdateMode::kPeriodic);
   EXPECT_EQ(config.system.update.every_frames, 12);
   EXPECT_FALSE(config.system.update.asynchronous);
