@@ -48,6 +48,13 @@ struct PlaneSweepOptions {
   // minimising cost + smoothness * |plane - median of the 3x3 neighbours' planes|.
   int refine_iterations = 2;
   double smoothness = 0.02;
+  // Coarse to fine over a pyramid of `levels` (1: every plane at full size): every
+  // 2^(levels-1)-th plane at the coarsest level (with the smoothness passes there), then on
+  // each finer level (every 2^l-th plane at level l) only the planes within `band_planes`
+  // steps of that level's grid of the planes found at the 3x3 pixels about it one level up.
+  int levels = 3;
+  int band_planes = 4;
+  int threads = 0;  // threads the sweep's tiles are spread over (the caller's included); 0: all
   void Check() const;
 };
 

@@ -21,12 +21,16 @@ struct DepthCase {
   DepthSourceKind kind;
   int reference;
   double disparity_step_px = 0.0;  // plane sweep: planes by disparity step (0: all 64)
+  int levels = 3;                  // plane sweep: pyramid levels (1: every plane at full size)
 };
 
 std::string CaseName(const ::testing::TestParamInfo<DepthCase>& info) {
   std::string name = ToString(info.param.kind) + "_ref" + std::to_string(info.param.reference);
   if (info.param.disparity_step_px > 0.0) {
     name += "_step" + std::to_string(static_cast<int>(info.param.disparity_step_px)) + "px";
+  }
+  if (info.param.kind == DepthSourceKind::kPlaneSweep) {
+    name += "_levels" + std::to_string(info.param.levels);
   }
   return name;
 }
@@ -52,6 +56,7 @@ TEST_P(DepthSources, MeasureTheCubeAgainstTheTruth) {
   options.min_depth_m = 0.3;
   options.max_depth_m = 1.5;
   options.plane_sweep.disparity_step_px = GetParam().disparity_step_px;
+  options.plane_sweep.levels = GetParam().levels;
   const std::unique_ptr<DepthSource> source = MakeDepthSource(s.rig, ref, options);
   EXPECT_EQ(source->kind(), GetParam().kind);
   const cv::Mat& mask = s.object_masks[ref];
@@ -90,11 +95,32 @@ TEST_P(DepthSources, MeasureTheCubeAgainstTheTruth) {
 
 INSTANTIATE_TEST_SUITE_P(AllSources, DepthSources,
                          ::testing::Values(DepthCase{DepthSourceKind::kPlaneSweep, 0},
+                                           DepthCase{DepthSourceKind::kPlaneSweep, 0, 0.0, 1},
+                                           DepthCase{DepthSourceKind::kPlaneSweep, 0, 0.0, 2},
                                            DepthCase{DepthSourceKind::kPlaneSweep, 0, 2.0},
                                            DepthCase{DepthSourceKind::kStereo, 0},
                                            DepthCase{DepthSourceKind::kStereo, 1},
                                            DepthCase{DepthSourceKind::kSensor, 0}),
                          CaseName);
+
+// The sweep's tiles are independent: spread over threads, the map is the same to the bit.
+TEST(DepthExtraction, PlaneSweepGivesTheSameMapOnAnyNumberOfThreads) {
+  const RigScene s = MakeRigScene();
+  DepthExtractionOptions options;
+  options.min_depth_m = 0.3;
+  options.max_depth_m = 1.5;
+  cv::Mat first;
+  for (const int threads : {1, 2, 3}) {
+    options.plane_sweep.threads = threads;
+    const DepthMap map = MakeDepthSource(s.rig, 0, options)->Extract(s.frame, PixelRect());
+    ASSERT_GT(map.ValidPixels(), 200) << threads << " threads";
+    if (first.empty()) {
+      first = map.depth;
+    } else {
+      EXPECT_EQ(cv::norm(map.depth, first, cv::NORM_INF), 0.0) << threads << " threads";
+    }
+  }
+}
 
 TEST(DepthExtraction, TexturednessIsTheSumOfSquaredChannelGradients) {
   cv::Mat image(5, 5, CV_32FC3, cv::Scalar(0.2, 0.2, 0.2));
@@ -117,6 +143,13 @@ TEST(DepthExtraction, BadConfigurationsAndInputsAreClearErrors) {
   options = DepthExtractionOptions();
   options.plane_sweep.window_px = 4;
   EXPECT_THROW(options.Check(), Error);
+  options.plane_sweep.window_px = 7;
+  options.plane_sweep.levels = 0;
+  EXPECT_THROW(options.Check(), Error);
+  options.plane_sweep.levels = 3;
+  options.plane_sweep.threads = -1;
+  EXPECT_THROW(options.Check(), Error);
+  options.plane_sweep.threads = 0;
   options = DepthExtractionOptions();
   options.stereo.num_disparities = 100;
   EXPECT_THROW(options.Check(), Error);

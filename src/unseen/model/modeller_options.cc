@@ -52,6 +52,11 @@ void PlaneSweepOptions::Check() const {
                "plane_sweep.refine_iterations {} must be in [0, 10]", refine_iterations);
   UNSEEN_CHECK(smoothness >= 0.0 && std::isfinite(smoothness),
                "plane_sweep.smoothness {} must be >= 0", smoothness);
+  UNSEEN_CHECK(levels >= 1 && levels <= 5, "plane_sweep.levels {} must be in [1, 5]", levels);
+  UNSEEN_CHECK(band_planes >= 1 && band_planes <= 64,
+               "plane_sweep.band_planes {} must be in [1, 64]", band_planes);
+  UNSEEN_CHECK(threads >= 0 && threads <= 256, "plane_sweep.threads {} must be in [0, 256]",
+               threads);
 }
 
 void StereoOptions::Check() const {
@@ -200,7 +205,10 @@ ModellerOptions FromYaml(const YAML::Node& root, const std::string& what, Modell
         {"uniqueness", YamlField(&ps.uniqueness)},
         {"min_support", YamlField(&ps.min_support)},
         {"refine_iterations", YamlField(&ps.refine_iterations)},
-        {"smoothness", YamlField(&ps.smoothness)}}},
+        {"smoothness", YamlField(&ps.smoothness)},
+        {"levels", YamlField(&ps.levels)},
+        {"band_planes", YamlField(&ps.band_planes)},
+        {"threads", YamlField(&ps.threads)}}},
       {"stereo",
        {{"num_disparities", YamlField(&st.num_disparities)},
         {"block_size", YamlField(&st.block_size)},

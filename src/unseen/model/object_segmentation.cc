@@ -252,15 +252,18 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
           near_origin || (camera.Unproject(Eigen::Vector2d(p.x, p.y), z) - origin_in_cam).norm() <
                              0.5 * options.max_radius_m;
       const float step = static_cast<float>(options.max_depth_step) * z;
-      for (int dy = -gap; dy <= gap; ++dy) {
-        for (int dx = -gap; dx <= gap; ++dx) {
-          const cv::Point q(p.x + dx, p.y + dy);
-          if (q.x < 0 || q.y < 0 || q.x >= size.width || q.y >= size.height) continue;
-          if (labels.at<int>(q) != 0 || !out.at<uint8_t>(q)) continue;
-          const float zq = depth_map.depth.at<float>(q);
-          if (!(zq > 0.0f) || std::abs(zq - z) > step) continue;
-          labels.at<int>(q) = label;
-          stack.push_back(q);
+      const int x_begin = std::max(p.x - gap, 0), x_end = std::min(p.x + gap, size.width - 1);
+      for (int y = std::max(p.y - gap, 0); y <= std::min(p.y + gap, size.height - 1); ++y) {
+        const float* depth_row = depth_map.depth.ptr<float>(y);
+        const uint8_t* out_row = out.ptr<uint8_t>(y);
+        int* label_row = labels.ptr<int>(y);
+        for (int x = x_begin; x <= x_end; ++x) {
+          const float zq = depth_row[x];
+          if (!(zq > 0.0f) || std::abs(zq - z) > step || label_row[x] != 0 || !out_row[x]) {
+            continue;
+          }
+          label_row[x] = label;
+          stack.emplace_back(x, y);
         }
       }
     }
@@ -272,9 +275,10 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
   const cv::Mat component = (labels == best_label) & (depth_map.depth > 0.0f);
   const int reached = best_label > 0 ? best_count : 0;
   rep.unconnected = before - reached;
-  cv::Mat area;
+  // Dilated over the region only (out is empty beyond it).
+  cv::Mat area = cv::Mat::zeros(size, CV_8UC1);
   const int fill = options.sparse_fill_px;
-  cv::dilate(component, area,
+  cv::dilate(component(rect), area(rect),
              cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * fill + 1, 2 * fill + 1)));
   out &= area;
   // Measured pixels inside the area that are not connected stay out.

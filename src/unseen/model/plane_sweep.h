@@ -6,7 +6,10 @@
 // H = K_j (R + t n^T / z) K_ref^-1 and compared by zero-mean normalised cross-correlation
 // over a window; a pixel's cost at a plane is the mean of its best cameras' (occlusion
 // robust). The winning plane is refined by the thesis's smoothness passes and to a
-// fraction of a plane by a parabola through the neighbouring costs.
+// fraction of a plane by a parabola through the neighbouring costs. Coarse to fine over an
+// image pyramid by default: every fourth plane at quarter size, then on each finer level
+// only a band of planes about what the level above found, in tiles of 32x32 pixels spread
+// over threads.
 #pragma once
 
 #include "unseen/model/depth_extraction.h"
