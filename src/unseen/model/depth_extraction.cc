@@ -14,15 +14,25 @@ namespace unseen {
 
 int DepthMap::ValidPixels() const { return depth.empty() ? 0 : cv::countNonZero(depth > 0.0f); }
 
-cv::Mat Texturedness(const cv::Mat& image) {
-  const cv::Mat bgr = image.type() == CV_32FC3 ? image : ToFloatBgr(image, "texturedness input");
+cv::Mat Texturedness(const cv::Mat& image, const PixelRect& roi) {
+  const PixelRect whole{0, 0, image.cols, image.rows};
+  const PixelRect r = roi.empty() ? whole : roi.Intersect(whole);
+  cv::Mat out = cv::Mat::zeros(image.size(), CV_32FC1);
+  if (r.empty()) return out;
+  // The region grown by the differences' reach, so that its own pixels are as over the
+  // whole image.
+  const PixelRect g = r.Grow(1).Intersect(whole);
+  const cv::Mat part = image(cv::Rect(g.x0, g.y0, g.width(), g.height()));
+  const cv::Mat bgr = part.type() == CV_32FC3 ? part : ToFloatBgr(part, "texturedness input");
   cv::Mat gx, gy;
   // Central differences (I(x+1) - I(x-1)) / 2 per channel.
-  cv::Sobel(bgr, gx, CV_32F, 1, 0, 1, 0.5, 0.0, cv::BORDER_REPLICATE);
-  cv::Sobel(bgr, gy, CV_32F, 0, 1, 1, 0.5, 0.0, cv::BORDER_REPLICATE);
-  cv::Mat sq = gx.mul(gx) + gy.mul(gy);
-  cv::Mat out;
-  cv::transform(sq, out, cv::Matx13f(1.0f, 1.0f, 1.0f));
+  cv::Sobel(bgr, gx, CV_32F, 1, 0, 1, 0.5, 0.0, cv::BORDER_REPLICATE | cv::BORDER_ISOLATED);
+  cv::Sobel(bgr, gy, CV_32F, 0, 1, 1, 0.5, 0.0, cv::BORDER_REPLICATE | cv::BORDER_ISOLATED);
+  const cv::Mat sq = gx.mul(gx) + gy.mul(gy);
+  cv::Mat t;
+  cv::transform(sq, t, cv::Matx13f(1.0f, 1.0f, 1.0f));
+  const cv::Rect inner(r.x0 - g.x0, r.y0 - g.y0, r.width(), r.height());
+  t(inner).copyTo(out(cv::Rect(r.x0, r.y0, r.width(), r.height())));
   return out;
 }
 
@@ -71,11 +81,11 @@ class SensorDepth : public DepthSource {
     const double near = near_m > 0.0 ? near_m : options_.min_depth_m;
     const double far = far_m > 0.0 ? far_m : options_.max_depth_m;
     DepthMap out;
-    out.texturedness = Texturedness(frame.images[reference_]);
     out.depth = cv::Mat::zeros(d.size(), CV_32FC1);
     out.dense = true;
     const PixelRect r =
         (roi.empty() ? cam.intrinsics.ImageRect() : roi).Intersect(cam.intrinsics.ImageRect());
+    out.texturedness = Texturedness(frame.images[reference_], r);
     for (int y = r.y0; y < r.y1; ++y) {
       const float* in = d.ptr<float>(y);
       float* o = out.depth.ptr<float>(y);

@@ -83,7 +83,7 @@ struct DepthExtractionOptions {
 // A depth map of the reference camera.
 struct DepthMap {
   cv::Mat depth;         // CV_32FC1 z in the reference camera, metres; 0 where not measured
-  cv::Mat texturedness;  // CV_32FC1 (3.1) of the reference image
+  cv::Mat texturedness;  // CV_32FC1 (3.1) of the reference image inside the region measured
   // The source measures every surface in its range (a sensor), not only textured ones: a
   // pixel without depth there shows no surface in the range.
   bool dense = false;
@@ -91,8 +91,9 @@ struct DepthMap {
 };
 
 // Texturedness (3.1): T(x, y) = sum over B, G, R of |grad I_c(x, y)|^2, central differences;
-// `image` CV_32FC3 (or CV_8UC3, scaled to [0, 1]).
-cv::Mat Texturedness(const cv::Mat& image);
+// `image` CV_32FC3 (or CV_8UC3, scaled to [0, 1]). Computed inside `roi` only (0 elsewhere;
+// the whole image when empty): a model's region is a small part of a frame.
+cv::Mat Texturedness(const cv::Mat& image, const PixelRect& roi = PixelRect());
 
 // Camera `camera`'s image of `frame` as CV_32FC1 grey in [0, 1], checked against the rig
 // (throws unseen::Error naming `source`, the camera and the frame when missing or

@@ -133,6 +133,30 @@ TEST(DepthExtraction, TexturednessIsTheSumOfSquaredChannelGradients) {
   EXPECT_NEAR(t.at<float>(2, 0), 0.0f, 1e-6);
 }
 
+// Inside a region the texturedness is that of the whole image (its differences reach past
+// the region's edge), outside it 0; an 8-bit image is scaled to [0, 1] first.
+TEST(DepthExtraction, TexturednessOfARegionIsThatOfTheWholeImageThere) {
+  cv::Mat image(40, 60, CV_8UC3);
+  cv::randu(image, 0, 255);
+  const cv::Mat whole = Texturedness(image);
+  const PixelRect roi{10, 5, 35, 30};
+  const cv::Mat part = Texturedness(image, roi);
+  ASSERT_EQ(part.size(), image.size());
+  ASSERT_EQ(part.type(), CV_32FC1);
+  for (int y = 0; y < image.rows; ++y) {
+    for (int x = 0; x < image.cols; ++x) {
+      const bool inside = x >= roi.x0 && x < roi.x1 && y >= roi.y0 && y < roi.y1;
+      ASSERT_FLOAT_EQ(part.at<float>(y, x), inside ? whole.at<float>(y, x) : 0.0f) << x << "," << y;
+    }
+  }
+  EXPECT_GT(cv::norm(whole(cv::Rect(10, 5, 25, 25)), cv::NORM_INF), 0.1);
+  // A region over the image's edge: clipped, replicated there as over the whole image.
+  const cv::Mat edge = Texturedness(image, PixelRect{-5, -5, 12, 8});
+  EXPECT_FLOAT_EQ(edge.at<float>(0, 0), whole.at<float>(0, 0));
+  EXPECT_FLOAT_EQ(edge.at<float>(7, 11), whole.at<float>(7, 11));
+  EXPECT_EQ(edge.at<float>(8, 11), 0.0f);
+}
+
 TEST(DepthExtraction, BadConfigurationsAndInputsAreClearErrors) {
   const RigScene s = MakeRigScene();
   DepthExtractionOptions options;

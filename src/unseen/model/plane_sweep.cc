@@ -467,9 +467,9 @@ DepthMap PlaneSweepDepth::Extract(const Frame& frame, const PixelRect& roi, doub
   level0.reference = GreyImage(frame, rig_, reference_, "planesweep");
   PadReference(&level0, o.window_px / 2);
   DepthMap out;
-  out.texturedness = Texturedness(frame.images[reference_]);
   out.depth = cv::Mat::zeros(kref.height, kref.width, CV_32FC1);
   const PixelRect r = (roi.empty() ? kref.ImageRect() : roi).Intersect(kref.ImageRect());
+  out.texturedness = Texturedness(frame.images[reference_], r);
   const double near = near_m > 0.0 ? near_m : options_.min_depth_m;
   const double far = far_m > 0.0 ? far_m : options_.max_depth_m;
   UNSEEN_CHECK(near > 0.0 && far > near, "depth source planesweep: depth range [{}, {}] m is empty",

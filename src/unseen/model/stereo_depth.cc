@@ -66,9 +66,9 @@ DepthMap StereoDepth::Extract(const Frame& frame, const PixelRect& roi, double n
   const cv::Mat ref_grey = GreyImage(frame, rig_, reference_, "stereo");
   const cv::Mat other_grey = GreyImage(frame, rig_, other_, "stereo");
   DepthMap out;
-  out.texturedness = Texturedness(frame.images[reference_]);
   out.depth = cv::Mat::zeros(kref.height, kref.width, CV_32FC1);
   const PixelRect r = (roi.empty() ? kref.ImageRect() : roi).Intersect(kref.ImageRect());
+  out.texturedness = Texturedness(frame.images[reference_], r);
   if (r.empty()) return out;
   const double near = near_m > 0.0 ? near_m : options_.min_depth_m;
   const double far = far_m > 0.0 ? far_m : options_.max_depth_m;
