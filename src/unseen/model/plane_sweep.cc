@@ -130,7 +130,8 @@ void WindowSums(const float* in, int w, int h, int window, float* column_sums, f
 
 // The ZNCC plane costs (the mean of the best cameras' 1 - ZNCC, 2 where a camera does not
 // see the whole window) at the pixels of `tile` (level pixels), for the planes `plane_ids`:
-// costs[p * tile.area() + i] for plane_ids[p], i row-major in the tile. Each camera's image
+// costs[p * tile.area() + i] for plane_ids[p], i row-major in the tile; with `parts`, plane p
+// only over (*parts)[p] (tile pixels; 2 elsewhere). Each camera's image
 // is warped (bilinear) by the plane's homography over the tile grown by half a window, and
 // the window sums of (warped, warped^2, reference x warped, seen) make the ZNCC.
 // Written out rather than cv::warpPerspective + cv::boxFilter: on tiles of 32x32 pixels
@@ -138,11 +139,11 @@ void WindowSums(const float* in, int w, int h, int window, float* column_sums, f
 // the arithmetic (measured 4x slower on the 5-camera cube); here one pass runs through
 // buffers that stay in the cache.
 void TileCosts(const SweepLevel& level, const Planes& planes, const cv::Rect& tile,
-               const std::vector<int>& plane_ids, int window, int num_best, TileScratch* s,
-               float* costs) {
+               const std::vector<int>& plane_ids, const std::vector<cv::Rect>* parts, int window,
+               int num_best, TileScratch* s, float* costs) {
   const int half = window / 2;
-  const int gw = tile.width + 2 * half, gh = tile.height + 2 * half;
   const int w = tile.width, h = tile.height, area = tile.area();
+  const int gw = w + 2 * half, gh = h + 2 * half;
   for (int c = 0; c < 4; ++c) {
     s->q[c].resize(static_cast<size_t>(gw) * gh);
     s->row_sums[c].resize(static_cast<size_t>(gw) * h);
@@ -176,12 +177,17 @@ void TileCosts(const SweepLevel& level, const Planes& planes, const cv::Rect& ti
   for (size_t p = 0; p < plane_ids.size(); ++p) {
     const double inverse_depth = planes.InverseDepth(plane_ids[p]);
     float* out = costs + p * area;
-    if (all_cameras) std::fill(out, out + area, 0.0f);
+    std::fill(out, out + area, all_cameras ? 0.0f : 2.0f);
+    // The part of the tile this plane is wanted in (tile pixels), grown by half a window.
+    const cv::Rect part = parts ? (*parts)[p] : cv::Rect(0, 0, w, h);
+    const int pw = part.width, ph = part.height;
+    const int pgw = pw + 2 * half, pgh = ph + 2 * half;
+    const double x_first = tile.x + part.x - half, y_first = tile.y + part.y - half;
     for (int j = 0; j < num_others; ++j) {
       const cv::Mat& image = level.others[j];
       const cv::Matx33d hm = level.fixed[j] + inverse_depth * level.per_inverse_depth[j];
-      // Where the grown tile's corners all land inside the image, so does all of it (a
-      // homography keeps the tile a convex quadrilateral): no bounds to check, all seen.
+      // Where the grown part's corners all land inside the image, so does all of it (a
+      // homography keeps the part a convex quadrilateral): no bounds to check, all seen.
       const float max_x = static_cast<float>(image.cols - 1) - 1e-3f;
       const float max_y = static_cast<float>(image.rows - 1) - 1e-3f;
       auto inside = [&](double px, double py) {
@@ -190,24 +196,23 @@ void TileCosts(const SweepLevel& level, const Planes& planes, const cv::Rect& ti
         const double sy = (hm(1, 0) * px + hm(1, 1) * py + hm(1, 2)) / hz;
         return hz > 0.0 && sx >= 0.0 && sy >= 0.0 && sx <= max_x && sy <= max_y;
       };
-      const double x_first = tile.x - half, y_first = tile.y - half;
-      const bool all_inside = inside(x_first, y_first) && inside(x_first + gw - 1, y_first) &&
-                              inside(x_first, y_first + gh - 1) &&
-                              inside(x_first + gw - 1, y_first + gh - 1);
+      const bool all_inside = inside(x_first, y_first) && inside(x_first + pgw - 1, y_first) &&
+                              inside(x_first, y_first + pgh - 1) &&
+                              inside(x_first + pgw - 1, y_first + pgh - 1);
       const cv::Matx33f hf(hm);
       const float* pixels = image.ptr<float>();
       const size_t stride = image.step1();
-      for (int y = 0; y < gh; ++y) {
+      for (int y = 0; y < pgh; ++y) {
         const float py = static_cast<float>(y_first + y);
-        const float* rp = level.padded.ptr<float>(tile.y + y) + tile.x;
-        float* q0 = &s->q[0][y * gw];
-        float* q1 = &s->q[1][y * gw];
-        float* q2 = &s->q[2][y * gw];
-        float* q3 = &s->q[3][y * gw];
+        const float* rp = level.padded.ptr<float>(tile.y + part.y + y) + tile.x + part.x;
+        float* q0 = &s->q[0][y * pgw];
+        float* q1 = &s->q[1][y * pgw];
+        float* q2 = &s->q[2][y * pgw];
+        float* q3 = &s->q[3][y * pgw];
         float hx = hf(0, 0) * static_cast<float>(x_first) + hf(0, 1) * py + hf(0, 2);
         float hy = hf(1, 0) * static_cast<float>(x_first) + hf(1, 1) * py + hf(1, 2);
         float hz = hf(2, 0) * static_cast<float>(x_first) + hf(2, 1) * py + hf(2, 2);
-        for (int x = 0; x < gw; ++x, hx += hf(0, 0), hy += hf(1, 0), hz += hf(2, 0)) {
+        for (int x = 0; x < pgw; ++x, hx += hf(0, 0), hy += hf(1, 0), hz += hf(2, 0)) {
           const float inv_z = 1.0f / hz;
           const float sx = hx * inv_z, sy = hy * inv_z;
           float v = 0.0f, seen = 1.0f;
@@ -228,36 +233,41 @@ void TileCosts(const SweepLevel& level, const Planes& planes, const cv::Rect& ti
         }
       }
       for (int c = 0; c < (all_inside ? 3 : 4); ++c) {
-        WindowSums(s->q[c].data(), w, h, window, s->row_sums[c].data(), s->sums[c].data());
+        WindowSums(s->q[c].data(), pw, ph, window, s->row_sums[c].data(), s->sums[c].data());
       }
       std::vector<float>& cost = s->camera_costs[j];
       if (!all_cameras) cost.resize(area);
       float* co = all_cameras ? out : cost.data();
       const float all_seen = static_cast<float>(window * window) - 0.5f;
-      for (int i = 0; i < area; ++i) {
-        const float mean_w = s->sums[0][i] * inv_n;
-        const float var_w = s->sums[1][i] * inv_n - mean_w * mean_w;
-        const float cross = s->sums[2][i] * inv_n - s->mean_r[i] * mean_w;
-        const float denom = std::sqrt(std::max(s->var_r[i] * var_w, 1e-12f));
-        const float ncc = std::clamp(cross / denom, -1.0f, 1.0f);
-        const float c = all_inside || s->sums[3][i] > all_seen ? 1.0f - ncc : 2.0f;
-        co[i] = all_cameras ? co[i] + c : c;
+      for (int y = 0; y < ph; ++y) {
+        for (int x = 0; x < pw; ++x) {
+          const int i = y * pw + x;                     // in the part
+          const int t = (part.y + y) * w + part.x + x;  // in the tile
+          const float mean_w = s->sums[0][i] * inv_n;
+          const float var_w = s->sums[1][i] * inv_n - mean_w * mean_w;
+          const float cross = s->sums[2][i] * inv_n - s->mean_r[t] * mean_w;
+          const float denom = std::sqrt(std::max(s->var_r[t] * var_w, 1e-12f));
+          const float ncc = std::clamp(cross / denom, -1.0f, 1.0f);
+          const float c = all_inside || s->sums[3][i] > all_seen ? 1.0f - ncc : 2.0f;
+          co[t] = all_cameras ? co[t] + c : c;
+        }
       }
     }
-    if (all_cameras) {
-      const float scale = 1.0f / num_best;
-      for (int i = 0; i < area; ++i) out[i] *= scale;
-      continue;
-    }
-    // The mean of the best cameras' costs; nth_element leaves the num_best smallest in
-    // front (unordered).
-    for (int i = 0; i < area; ++i) {
-      for (int j = 0; j < num_others; ++j) s->per_camera[j] = s->camera_costs[j][i];
-      std::nth_element(s->per_camera.begin(), s->per_camera.begin() + (num_best - 1),
-                       s->per_camera.end());
-      float best_sum = 0.0f;
-      for (int b = 0; b < num_best; ++b) best_sum += s->per_camera[b];
-      out[i] = best_sum / num_best;
+    for (int y = part.y; y < part.y + ph; ++y) {
+      for (int t = y * w + part.x; t < y * w + part.x + pw; ++t) {
+        if (all_cameras) {
+          out[t] /= static_cast<float>(num_best);
+          continue;
+        }
+        // The mean of the best cameras' costs; nth_element leaves the num_best smallest in
+        // front (unordered).
+        for (int j = 0; j < num_others; ++j) s->per_camera[j] = s->camera_costs[j][t];
+        std::nth_element(s->per_camera.begin(), s->per_camera.begin() + (num_best - 1),
+                         s->per_camera.end());
+        float best_sum = 0.0f;
+        for (int b = 0; b < num_best; ++b) best_sum += s->per_camera[b];
+        out[t] = best_sum / num_best;
+      }
     }
   }
 }
@@ -297,7 +307,8 @@ std::vector<float> CostVolume(const SweepLevel& level, const Planes& planes, con
   for (int p = 0; p < count; ++p) plane_ids[p] = first + p * stride;
   ForEachTile<TileScratch>(pool, Tiles(region), [&](const cv::Rect& tile, TileScratch* scratch) {
     scratch->costs.resize(static_cast<size_t>(tile.area()) * count);
-    TileCosts(level, planes, tile, plane_ids, window, num_best, scratch, scratch->costs.data());
+    TileCosts(level, planes, tile, plane_ids, nullptr, window, num_best, scratch,
+              scratch->costs.data());
     for (int y = 0; y < tile.height; ++y) {
       for (int x = 0; x < tile.width; ++x) {
         const size_t i =
@@ -387,13 +398,14 @@ void BandPass(const SweepLevel& level, const Planes& planes, const cv::Rect& reg
   const float band = static_cast<float>(o.band_planes * stride);
   struct BandScratch : TileScratch {
     std::vector<int> lo, hi, plane_ids, slot;
-    std::vector<char> wanted;
+    std::vector<cv::Rect> wanted;  // per grid plane, the part of the tile that wants it
+    std::vector<cv::Rect> parts;   // per plane of plane_ids
     std::vector<float> pixel_costs;
   };
   ForEachTile<BandScratch>(pool, Tiles(region), [&](const cv::Rect& tile, BandScratch* f) {
     f->lo.resize(tile.area());
     f->hi.resize(tile.area());
-    f->wanted.assign(grid, 0);
+    f->wanted.assign(grid, cv::Rect());
     f->slot.resize(grid);
     f->pixel_costs.resize(grid);
     for (int y = 0; y < tile.height; ++y) {
@@ -421,17 +433,20 @@ void BandPass(const SweepLevel& level, const Planes& planes, const cv::Rect& reg
         f->hi[t] = k_max < 0.0f
                        ? 0
                        : std::min(static_cast<int>(std::ceil((k_max + band) / stride)), grid - 1);
-        for (int k = f->lo[t]; k <= f->hi[t]; ++k) f->wanted[k] = 1;
+        for (int k = f->lo[t]; k <= f->hi[t]; ++k) f->wanted[k] |= cv::Rect(x, y, 1, 1);
       }
     }
     f->plane_ids.clear();
+    f->parts.clear();
     for (int k = 0; k < grid; ++k) {
       f->slot[k] = static_cast<int>(f->plane_ids.size());
-      if (f->wanted[k]) f->plane_ids.push_back(k * stride);
+      if (f->wanted[k].empty()) continue;
+      f->plane_ids.push_back(k * stride);
+      f->parts.push_back(f->wanted[k]);
     }
     if (f->plane_ids.empty()) return;
     f->costs.resize(static_cast<size_t>(tile.area()) * f->plane_ids.size());
-    TileCosts(level, planes, tile, f->plane_ids, window, num_best, f, f->costs.data());
+    TileCosts(level, planes, tile, f->plane_ids, &f->parts, window, num_best, f, f->costs.data());
     for (int t = 0; t < tile.area(); ++t) {
       if (f->lo[t] > f->hi[t]) continue;
       const int count = f->hi[t] - f->lo[t] + 1;
