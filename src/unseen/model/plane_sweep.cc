@@ -100,7 +100,7 @@ struct TileScratch {
 
 // Window sums of the planar channel `in` ((w + window - 1) x (h + window - 1), row-major)
 // over window x window: out (w x h) at (x, y) sums in over [x, x + window) x [y, y + window).
-// Running sums down the columns, then prefix sums along the rows.
+// Running sums down the columns, then running sums along the rows.
 void WindowSums(const float* in, int w, int h, int window, float* column_sums, float* out) {
   const int gw = w + window - 1;
   float* cs = column_sums;
