@@ -283,8 +283,7 @@ cv::Mat ConvoySimulation::RenderView(const Rigid3d& world_from_cam, const Rigid3
     PixelRect below = fine.ImageRect();
     below.y0 = std::max(0, static_cast<int>(std::floor(fine.cy)) - 1);
     Render(ground_, fine, world_from_cam.Inverse(), below, ground_options, &buffers_);
-    buffers_.color.copyTo(image(cv::Rect(below.x0, below.y0, below.width(), below.height())),
-                          buffers_.mask);
+    buffers_.color.copyTo(image(ToCvRect(below)), buffers_.mask);
   }
   Render(lead_model_, fine, cam_from_lead, fine.ImageRect(), RenderOptions(), &buffers_);
   buffers_.color.copyTo(image, buffers_.mask);

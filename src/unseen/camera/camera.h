@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <opencv2/core/types.hpp>
 
 #include "unseen/geometry/rigid3.h"
 
@@ -28,6 +29,9 @@ struct PixelRect {
   PixelRect Grow(int margin) const { return {x0 - margin, y0 - margin, x1 + margin, y1 + margin}; }
   bool operator==(const PixelRect&) const = default;
 };
+
+// The same rectangle as OpenCV's (x, y, width, height).
+inline cv::Rect ToCvRect(const PixelRect& r) { return {r.x0, r.y0, r.width(), r.height()}; }
 
 // Intrinsics of an undistorted pinhole camera plus its image size; optional OpenCV
 // distortion coefficients [k1, k2, p1, p2, k3], removed once at input.

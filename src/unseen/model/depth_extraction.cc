@@ -22,7 +22,7 @@ cv::Mat Texturedness(const cv::Mat& image, const PixelRect& roi) {
   // The region grown by the differences' reach, so that its own pixels are as over the
   // whole image.
   const PixelRect g = r.Grow(1).Intersect(whole);
-  const cv::Mat part = image(cv::Rect(g.x0, g.y0, g.width(), g.height()));
+  const cv::Mat part = image(ToCvRect(g));
   const cv::Mat bgr = part.type() == CV_32FC3 ? part : ToFloatBgr(part, "texturedness input");
   cv::Mat gx, gy;
   // Central differences (I(x+1) - I(x-1)) / 2 per channel.
@@ -32,7 +32,7 @@ cv::Mat Texturedness(const cv::Mat& image, const PixelRect& roi) {
   cv::Mat t;
   cv::transform(sq, t, cv::Matx13f(1.0f, 1.0f, 1.0f));
   const cv::Rect inner(r.x0 - g.x0, r.y0 - g.y0, r.width(), r.height());
-  t(inner).copyTo(out(cv::Rect(r.x0, r.y0, r.width(), r.height())));
+  t(inner).copyTo(out(ToCvRect(r)));
   return out;
 }
 

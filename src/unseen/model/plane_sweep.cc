@@ -22,8 +22,6 @@ cv::Matx33d ToCv(const Eigen::Matrix3d& m) {
   return out;
 }
 
-cv::Rect ToCv(const PixelRect& r) { return cv::Rect(r.x0, r.y0, r.width(), r.height()); }
-
 // The planes for depths [near, far] over region `r` of the reference camera: how far the
 // match of the region's centre moves across the range in the other cameras, in steps of
 // o.disparity_step_px, capped at o.planes.
@@ -53,25 +51,23 @@ struct SweepLevel {
   cv::Mat padded;               // the reference grown by half a window (edges replicated)
   std::vector<cv::Mat> others;  // the other cameras' greys
   std::vector<cv::Matx33d> fixed, per_inverse_depth;
-  int half_window = 0;
 };
 
 void PadReference(SweepLevel* level, int half_window) {
-  level->half_window = half_window;
   cv::copyMakeBorder(level->reference, level->padded, half_window, half_window, half_window,
                      half_window, cv::BORDER_REPLICATE);
 }
 
-// Level 1 of `level0` (half size, cv::pyrDown): pixel x of level 0 is (x + 0.5) / 2 - 0.5
-// of level 1, so H_1 = S H_0 S^-1.
-SweepLevel HalfLevel(const SweepLevel& level0) {
+// Level 1 of `level0` (half size, cv::pyrDown; reference padded by `half_window`): pixel x
+// of level 0 is (x + 0.5) / 2 - 0.5 of level 1, so H_1 = S H_0 S^-1.
+SweepLevel HalfLevel(const SweepLevel& level0, int half_window) {
   SweepLevel out;
   cv::pyrDown(level0.reference, out.reference);
   for (const cv::Mat& g : level0.others) {
     out.others.emplace_back();
     cv::pyrDown(g, out.others.back());
   }
-  PadReference(&out, level0.half_window);
+  PadReference(&out, half_window);
   const cv::Matx33d s(0.5, 0, -0.25, 0, 0.5, -0.25, 0, 0, 1);
   const cv::Matx33d s_inv(2, 0, 0.5, 0, 2, 0.5, 0, 0, 1);
   for (size_t j = 0; j < level0.fixed.size(); ++j) {
@@ -521,11 +517,14 @@ DepthMap PlaneSweepDepth::Extract(const Frame& frame, const PixelRect& roi, doub
   planes.inv_step = (1.0 / near - planes.inv_far) / (planes.count - 1);
   const int window = o.window_px;
   // The pyramid (level l: half the size of level l - 1), as deep as o.levels asks while the
-  // region still holds a window.
+  // region still holds a window and the coarsest level keeps at least 8 planes (a choice
+  // needs neighbours on both sides).
+  int max_levels = o.levels;
+  while (max_levels > 1 && (planes.count - 1) / (1 << (max_levels - 1)) + 1 < 8) --max_levels;
   std::vector<SweepLevel> levels;
-  std::vector<cv::Rect> regions{ToCv(r)};
+  std::vector<cv::Rect> regions{ToCvRect(r)};
   levels.push_back(std::move(level0));
-  while (static_cast<int>(levels.size()) < o.levels) {
+  while (static_cast<int>(levels.size()) < max_levels) {
     const cv::Rect& prev = regions.back();
     const cv::Rect next =
         cv::Rect(cv::Point(prev.x / 2, prev.y / 2),
@@ -533,12 +532,10 @@ DepthMap PlaneSweepDepth::Extract(const Frame& frame, const PixelRect& roi, doub
         cv::Rect(0, 0, (levels.back().reference.cols + 1) / 2,
                  (levels.back().reference.rows + 1) / 2);
     if (next.width < window || next.height < window) break;
-    levels.push_back(HalfLevel(levels.back()));
+    levels.push_back(HalfLevel(levels.back(), window / 2));
     regions.push_back(next);
   }
-  // The coarsest level keeps at least 8 planes (a choice needs neighbours on both sides).
-  int top = static_cast<int>(levels.size()) - 1;
-  while (top > 0 && (planes.count - 1) / (1 << top) + 1 < 8) --top;
+  const int top = static_cast<int>(levels.size()) - 1;
   UNSEEN_LOG_DEBUG("plane sweep: {} planes over [{:.3f}, {:.3f}] m, {} cameras, {} levels",
                    planes.count, near, far, num_others + 1, top + 1);
   const float min_t = static_cast<float>(options_.min_texturedness);

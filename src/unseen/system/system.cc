@@ -130,8 +130,7 @@ cv::Mat System::MovingWithObject(const Frame& frame, const TrackResult& track, b
              camera.intrinsics.ImageRect(), RenderOptions{}, &render);
       in.depth = cv::Mat::zeros(image.size(), CV_32FC1);
       if (!render.roi.empty()) {
-        render.depth.copyTo(in.depth(
-            cv::Rect(render.roi.x0, render.roi.y0, render.roi.width(), render.roi.height())));
+        render.depth.copyTo(in.depth(ToCvRect(render.roi)));
       }
     }
   }

@@ -18,8 +18,6 @@ const cv::Scalar kSelectedColour(255, 255, 0);
 const cv::Scalar kTrackingColour(0, 255, 0);
 const cv::Scalar kLostColour(0, 0, 255);
 
-cv::Rect ToRect(const PixelRect& r) { return {r.x0, r.y0, r.width(), r.height()}; }
-
 // Red tint where there is interest: image += alpha * S * (red - image).
 void TintInterest(const cv::Mat& interest, double alpha, cv::Mat* image) {
   if (interest.empty() || interest.size() != image->size() || alpha <= 0.0) return;
@@ -79,10 +77,10 @@ void DrawSystemOverlay(const SystemStep& step, const Mesh* model, const PinholeC
   UNSEEN_CHECK(image->type() == CV_8UC3, "system overlay: the image must be CV_8UC3 or CV_32FC3");
   TintInterest(step.interest, options.interest_alpha, image);
   for (const PixelRect& box : step.candidates) {
-    cv::rectangle(*image, ToRect(box), kCandidateColour, 1);
+    cv::rectangle(*image, ToCvRect(box), kCandidateColour, 1);
   }
   if (!step.region.empty()) {
-    cv::rectangle(*image, ToRect(step.region), kSelectedColour, options.line_thickness_px);
+    cv::rectangle(*image, ToCvRect(step.region), kSelectedColour, options.line_thickness_px);
   }
   std::string line = fmt::format("frame {}  {}", step.frame_id, ToString(step.status));
   if (step.track) {

@@ -44,7 +44,7 @@ std::optional<Projector> CaptureProjector(const Mesh& model, const PinholeCamera
   Render(model, camera, cam_from_obj, crop, options, &buffers);
   if (buffers.mask.empty() || cv::countNonZero(buffers.mask) == 0) return std::nullopt;
   Projector p;
-  p.image = image(cv::Rect(crop.x0, crop.y0, crop.width(), crop.height())).clone();
+  p.image = image(ToCvRect(crop)).clone();
   p.depth = buffers.depth;
   p.depth_tolerance_m = depth_tolerance_m;
   p.camera = camera;
