@@ -13,8 +13,6 @@
 #include "unseen/util/error.h"
 
 namespace unseen {
-
-
 namespace {
 
 // A measured point with the surface normal the depth map shows there (zero if unknown).
@@ -26,11 +24,19 @@ struct Surfel {
 struct Plane {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
   double offset = 0.0;  // normal . p + offset = 0
+  // SegmentationOptions::plane_tolerance_m and the cosine of plane_normal_deg, computed
+  // once: Holds runs for every point of every RANSAC hypothesis.
+  double tolerance_m = 0.0;
+  double min_normal_dot = 1.0;
+  Plane() = default;
+  explicit Plane(const SegmentationOptions& o)
+      : tolerance_m(o.plane_tolerance_m),
+        min_normal_dot(std::cos(o.plane_normal_deg * M_PI / 180.0)) {}
   // On the plane: near it and facing its way (a surface that only crosses the plane, as
   // the table beside a box's face crosses the face's plane, is not on it).
-  bool Holds(const Surfel& s, const SegmentationOptions& o) const {
-    return std::abs(normal.dot(s.p) + offset) < o.plane_tolerance_m &&
-           std::abs(normal.dot(s.n)) >= std::cos(o.plane_normal_deg * M_PI / 180.0);
+  bool Holds(const Surfel& s) const {
+    return std::abs(normal.dot(s.p) + offset) < tolerance_m &&
+           std::abs(normal.dot(s.n)) >= min_normal_dot;
   }
 };
 
@@ -47,7 +53,8 @@ std::optional<Plane> DominantPlane(const std::vector<Surfel>& points,
   std::uniform_int_distribution<size_t> pick(0, candidates.size() - 1);
   // Scored on an even subsample of at most 2 000 points.
   const size_t stride = std::max<size_t>(1, candidates.size() / 2000);
-  Plane best;
+  const Plane tolerances(o);
+  Plane best = tolerances;
   int best_inliers = 0;
   for (int it = 0; it < o.plane_iterations; ++it) {
     const Eigen::Vector3d& a = points[candidates[pick(*rng)]].p;
@@ -55,12 +62,12 @@ std::optional<Plane> DominantPlane(const std::vector<Surfel>& points,
     const Eigen::Vector3d& c = points[candidates[pick(*rng)]].p;
     const Eigen::Vector3d n = (b - a).cross(c - a);
     if (n.norm() < 1e-9) continue;
-    Plane p;
+    Plane p = tolerances;
     p.normal = n.normalized();
     p.offset = -p.normal.dot(a);
     int inliers = 0;
     for (size_t i = 0; i < candidates.size(); i += stride) {
-      inliers += p.Holds(points[candidates[i]], o) ? 1 : 0;
+      inliers += p.Holds(points[candidates[i]]) ? 1 : 0;
     }
     if (inliers > best_inliers) {
       best_inliers = inliers;
@@ -73,13 +80,13 @@ std::optional<Plane> DominantPlane(const std::vector<Surfel>& points,
 }
 
 // The support the object stands on: of the dominant planes among `points` (pixels
-// `pixels` of an image of `size`), the first with inliers farther than `rim` from `origin`
-// in a connected stretch of the image — a table runs on beyond the object, a face of an
+// `pixels`, all inside the image rectangle `rect`), the first with inliers farther than `rim` from
+// `origin` in a connected stretch of the image — a table runs on beyond the object, a face of an
 // object smaller than `rim` does not (its plane meets far surfaces in scattered lines at
 // most). Up to four planes are tried (a box shows three faces), each one's inliers set
 // aside.
 std::optional<Plane> SupportPlane(const std::vector<Surfel>& points,
-                                  const std::vector<cv::Point>& pixels, cv::Size size,
+                                  const std::vector<cv::Point>& pixels, const cv::Rect& rect,
                                   const Eigen::Vector3d& origin, double rim,
                                   const SegmentationOptions& o) {
   std::mt19937 rng(12345);
@@ -87,21 +94,22 @@ std::optional<Plane> SupportPlane(const std::vector<Surfel>& points,
   for (int attempt = 0; attempt < 4; ++attempt) {
     const std::optional<Plane> plane = DominantPlane(points, excluded, o, &rng);
     if (!plane) return std::nullopt;
-    cv::Mat inliers = cv::Mat::zeros(size, CV_8UC1);
+    // Over `rect` only: no inlier lies beyond it, so no stretch leaves it.
+    cv::Mat inliers = cv::Mat::zeros(rect.size(), CV_8UC1);
     for (size_t i = 0; i < points.size(); ++i) {
-      if (!excluded[i] && plane->Holds(points[i], o)) {
-        inliers.at<uint8_t>(pixels[i]) = 255;
+      if (!excluded[i] && plane->Holds(points[i])) {
+        inliers.at<uint8_t>(pixels[i] - rect.tl()) = 255;
       }
     }
     cv::Mat labels;
     cv::connectedComponents(inliers, labels, 8, CV_32S);
     // A stretch that reaches beyond the rim.
     for (size_t i = 0; i < points.size(); ++i) {
-      if (excluded[i] || labels.at<int>(pixels[i]) <= 0) continue;
+      if (excluded[i] || labels.at<int>(pixels[i] - rect.tl()) <= 0) continue;
       if ((points[i].p - origin).norm() > rim) return plane;
     }
     for (size_t i = 0; i < points.size(); ++i) {
-      if (plane->Holds(points[i], o)) excluded[i] = true;
+      if (plane->Holds(points[i])) excluded[i] = true;
     }
   }
   return std::nullopt;
@@ -179,7 +187,7 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
       near_pixels.push_back(pixels[i]);
     }
     support =
-        SupportPlane(near, near_pixels, size, origin_in_cam, 0.7 * options.max_radius_m, options);
+        SupportPlane(near, near_pixels, rect, origin_in_cam, 0.7 * options.max_radius_m, options);
     rep.plane_found = support.has_value();
     if (support) {
       const double side = support->normal.dot(origin_in_cam) + support->offset >= 0.0 ? 1.0 : -1.0;
@@ -195,7 +203,7 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
     if ((points[i] - origin_in_cam).norm() > options.max_radius_m) {
       ++rep.beyond_radius;
       out.at<uint8_t>(px) = 0;
-    } else if (support && support->Holds(surfels[i], options)) {
+    } else if (support && support->Holds(surfels[i])) {
       ++rep.on_plane;
       out.at<uint8_t>(px) = 0;
     }
@@ -216,13 +224,15 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
   if (seed < 0) return out;
   const int before = cv::countNonZero(out & (depth_map.depth > 0.0f));
   if (rep.dense) {
-    cv::Mat flood(size.height + 2, size.width + 2, CV_8UC1, cv::Scalar(1));
-    flood(cv::Rect(1, 1, size.width, size.height)).setTo(0, out);
+    // Over the region only (out is empty beyond it, and the mask stops the fill there).
+    const cv::Rect inner(1, 1, rect.width, rect.height);
+    cv::Mat flood(rect.height + 2, rect.width + 2, CV_8UC1, cv::Scalar(1));
+    flood(inner).setTo(0, out(rect));
     const float step = static_cast<float>(options.max_depth_step * points[seed].z());
-    cv::Mat depth = depth_map.depth.clone();
-    cv::floodFill(depth, flood, pixels[seed], cv::Scalar(0), nullptr, cv::Scalar(step),
+    cv::Mat depth = depth_map.depth(rect).clone();
+    cv::floodFill(depth, flood, pixels[seed] - rect.tl(), cv::Scalar(0), nullptr, cv::Scalar(step),
                   cv::Scalar(step), 8 | cv::FLOODFILL_MASK_ONLY | (255 << 8));
-    out &= flood(cv::Rect(1, 1, size.width, size.height)) == 255;
+    out(rect) &= flood(inner) == 255;
     rep.unconnected = before - cv::countNonZero(out);
     return out;
   }
@@ -236,6 +246,13 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
   const int gap = options.sparse_gap_px;
   int best_label = 0, best_count = 0;
   int next_label = 0;
+  // `pixels` holds the measured pixels of the region row by row, x ascending (the only
+  // ones the scan below can take): row_begin[y - r.y0] is the first of row y. A window
+  // visits those of its rows instead of every pixel (the depth is sparse), in the same order.
+  std::vector<int> row_begin(r.height() + 1, 0);
+  for (const cv::Point& px : pixels) ++row_begin[px.y - r.y0 + 1];
+  for (int k = 0; k < r.height(); ++k) row_begin[k + 1] += row_begin[k];
+  auto x_less = [](const cv::Point& a, int x) { return a.x < x; };
   for (size_t i = 0; i < points.size(); ++i) {
     if (!out.at<uint8_t>(pixels[i]) || labels.at<int>(pixels[i]) != 0) continue;
     const int label = ++next_label;
@@ -252,16 +269,17 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
           near_origin || (camera.Unproject(Eigen::Vector2d(p.x, p.y), z) - origin_in_cam).norm() <
                              0.5 * options.max_radius_m;
       const float step = static_cast<float>(options.max_depth_step) * z;
-      const int x_begin = std::max(p.x - gap, 0), x_end = std::min(p.x + gap, size.width - 1);
-      for (int y = std::max(p.y - gap, 0); y <= std::min(p.y + gap, size.height - 1); ++y) {
+      const int x_begin = p.x - gap, x_end = p.x + gap;
+      for (int y = std::max(p.y - gap, r.y0); y <= std::min(p.y + gap, r.y1 - 1); ++y) {
         const float* depth_row = depth_map.depth.ptr<float>(y);
         const uint8_t* out_row = out.ptr<uint8_t>(y);
         int* label_row = labels.ptr<int>(y);
-        for (int x = x_begin; x <= x_end; ++x) {
-          const float zq = depth_row[x];
-          if (!(zq > 0.0f) || std::abs(zq - z) > step || label_row[x] != 0 || !out_row[x]) {
-            continue;
-          }
+        const auto row_end = pixels.begin() + row_begin[y - r.y0 + 1];
+        for (auto q =
+                 std::lower_bound(pixels.begin() + row_begin[y - r.y0], row_end, x_begin, x_less);
+             q != row_end && q->x <= x_end; ++q) {
+          const int x = q->x;
+          if (std::abs(depth_row[x] - z) > step || label_row[x] != 0 || !out_row[x]) continue;
           label_row[x] = label;
           stack.emplace_back(x, y);
         }
