@@ -138,8 +138,11 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
   if (r.empty()) return out;
   const cv::Rect rect(r.x0, r.y0, r.width(), r.height());
   out(rect).setTo(255);
-  if (!given_mask.empty()) out.setTo(0, given_mask == 0);
-  rep.region_pixels = cv::countNonZero(out);
+  // From here on `out` is empty beyond `rect`: the whole-image steps below look at `rect`.
+  cv::Mat out_region = out(rect);
+  const cv::Mat depth_region = depth_map.depth(rect);
+  if (!given_mask.empty()) out_region.setTo(0, given_mask(rect) == 0);
+  rep.region_pixels = cv::countNonZero(out_region);
 
   // The measured points in the region and their distance from the origin.
   std::vector<Eigen::Vector3d> points;
@@ -196,7 +199,7 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
   }
   // Where the depth is dense, the pixels without depth are not the object's either.
   if (rep.dense) {
-    out.setTo(0, depth_map.depth <= 0.0f);
+    out_region.setTo(0, depth_region <= 0.0f);
   }
   for (size_t i = 0; i < points.size(); ++i) {
     const cv::Point& px = pixels[i];
@@ -208,7 +211,7 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
       out.at<uint8_t>(px) = 0;
     }
   }
-  if (cv::countNonZero(out) == 0) return out;
+  if (cv::countNonZero(out_region) == 0) return out;
 
   // Dense depth: connected in depth to the measured pixel nearest the origin.
   int seed = -1;
@@ -222,18 +225,18 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
     }
   }
   if (seed < 0) return out;
-  const int before = cv::countNonZero(out & (depth_map.depth > 0.0f));
+  const int before = cv::countNonZero(out_region & (depth_region > 0.0f));
   if (rep.dense) {
     // Over the region only (out is empty beyond it, and the mask stops the fill there).
     const cv::Rect inner(1, 1, rect.width, rect.height);
     cv::Mat flood(rect.height + 2, rect.width + 2, CV_8UC1, cv::Scalar(1));
-    flood(inner).setTo(0, out(rect));
+    flood(inner).setTo(0, out_region);
     const float step = static_cast<float>(options.max_depth_step * points[seed].z());
-    cv::Mat depth = depth_map.depth(rect).clone();
+    cv::Mat depth = depth_region.clone();
     cv::floodFill(depth, flood, pixels[seed] - rect.tl(), cv::Scalar(0), nullptr, cv::Scalar(step),
                   cv::Scalar(step), 8 | cv::FLOODFILL_MASK_ONLY | (255 << 8));
-    out(rect) &= flood(inner) == 255;
-    rep.unconnected = before - cv::countNonZero(out);
+    out_region &= flood(inner) == 255;
+    rep.unconnected = before - cv::countNonZero(out_region);
     return out;
   }
   // Sparse depth (the image-based sources measure textured pixels only): the measured
@@ -290,17 +293,17 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
       best_label = label;
     }
   }
-  const cv::Mat component = (labels == best_label) & (depth_map.depth > 0.0f);
+  const cv::Mat component = (labels(rect) == best_label) & (depth_region > 0.0f);
   const int reached = best_label > 0 ? best_count : 0;
   rep.unconnected = before - reached;
   // Dilated over the region only (out is empty beyond it).
-  cv::Mat area = cv::Mat::zeros(size, CV_8UC1);
+  cv::Mat area;
   const int fill = options.sparse_fill_px;
-  cv::dilate(component(rect), area(rect),
+  cv::dilate(component, area,
              cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * fill + 1, 2 * fill + 1)));
-  out &= area;
+  out_region &= area;
   // Measured pixels inside the area that are not connected stay out.
-  out.setTo(0, (depth_map.depth > 0.0f) & ~component);
+  out_region.setTo(0, (depth_region > 0.0f) & ~component);
   return out;
 }
 
