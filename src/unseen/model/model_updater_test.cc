@@ -93,13 +93,31 @@ TEST_F(ModelUpdates, IncrementalFusesEveryBuildIntoOneModel) {
   }
   ASSERT_TRUE(model.has_value());
   EXPECT_EQ(updater.stats().fusion.fused, 2);
-  // The same view again: no new key view, but the latest view textures it too.
+  // The same view again: no new key view, and by default no latest view either.
   EXPECT_EQ(updater.stats().fusion.key_views, 1);
-  EXPECT_EQ(model->projectors.size(), 2u);
+  EXPECT_EQ(model->projectors.size(), 1u);
   EXPECT_LE(model->num_triangles(), options_.fusion.max_triangles);
   EXPECT_EQ(ParseModelUpdateMode("incremental"), ModelUpdateMode::kIncremental);
   // A failed first build cannot start a model.
   EXPECT_THROW(updater.Start(ModelBuild()), Error);
+}
+
+TEST_F(ModelUpdates, LatestViewTexturesTheModelWhenAsked) {
+  options_.fusion.latest_view = true;
+  Modeller modeller(scene_.rig, 0, options_);
+  update_.mode = ModelUpdateMode::kIncremental;
+  ModelUpdater updater(&modeller, update_);
+  const Mesh start =
+      updater.Start(modeller.Build(scene_.frame, scene_.world_from_obj, PixelRect()));
+  EXPECT_EQ(start.projectors.size(), 1u);  // the first view is a key view, not a latest one
+  std::optional<Mesh> model;
+  for (int i = 0; i < 3 && !model; ++i) {
+    model = updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0, start);
+  }
+  ASSERT_TRUE(model.has_value());
+  // The same view again: no new key view, but the latest view textures it too.
+  EXPECT_EQ(updater.stats().fusion.key_views, 1);
+  EXPECT_EQ(model->projectors.size(), 2u);
 }
 
 TEST_F(ModelUpdates, NoneNeverRebuildsAndBadOptionsAreErrors) {
