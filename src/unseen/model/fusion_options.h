@@ -41,7 +41,8 @@ struct ModelFusionOptions {
   // another orientation towards the light). Off by default: its texture is painted where
   // that frame's tracked pose put it, so each build hands the tracker that frame's error
   // and the object frame drifts (5-camera cube: end rotation 1.77 -> 1.41 deg, mean 1.41 ->
-  // 0.86 deg without it; better or equal on 8 of 9 development and rendered RGB-D runs).
+  // 0.86 deg without it; better on 7 of 9 development and rendered RGB-D runs, equal on the
+  // real cube, mixed on the 5-camera cube's stereo model).
   bool latest_view = false;
   // The surface handed to the tracker is decimated (mesh/decimate.h) to this many
   // triangles, moving it by at most max_error_voxels voxels.
