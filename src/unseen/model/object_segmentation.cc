@@ -80,11 +80,11 @@ std::optional<Plane> DominantPlane(const std::vector<Surfel>& points,
 }
 
 // The support the object stands on: of the dominant planes among `points` (pixels
-// `pixels`, all inside the image rectangle `rect`), the first with inliers farther than `rim` from
-// `origin` in a connected stretch of the image — a table runs on beyond the object, a face of an
-// object smaller than `rim` does not (its plane meets far surfaces in scattered lines at
-// most). Up to four planes are tried (a box shows three faces), each one's inliers set
-// aside.
+// `pixels`, all inside the image rectangle `rect`), the first with inliers farther than
+// `rim` from `origin` in a connected stretch of the image — a table runs on beyond the
+// object, a face of an object smaller than `rim` does not (its plane meets far surfaces in
+// scattered lines at most). Up to four planes are tried (a box shows three faces), each
+// one's inliers set aside.
 std::optional<Plane> SupportPlane(const std::vector<Surfel>& points,
                                   const std::vector<cv::Point>& pixels, const cv::Rect& rect,
                                   const Eigen::Vector3d& origin, double rim,
