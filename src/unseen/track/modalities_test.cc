@@ -133,6 +133,26 @@ TEST_F(ModalityScene, DepthAloneRecoversThePose) {
   EXPECT_GT(r.confidence, 0.5) << "depth alone judges the frame: " << r.BriefReport();
 }
 
+TEST_F(ModalityScene, DepthLedCoarseLevelsKeepTheirStricterStop) {
+  // PyramidOptions::photometric_coarse_min_update_px applies only while the texture leads:
+  // the depth rows alone take more than one round on some coarse level from this offset.
+  TrackerOptions options;
+  options.photometric.enabled = false;
+  options.region.enabled = false;
+  options.pyramid.photometric_coarse_min_update_px = 1e3;
+  Tracker tracker(rig_, flat_, options);
+  Vector6d d;
+  d << 0.006, -0.005, 0.02, 3 * kDeg, -3 * kDeg, 2 * kDeg;
+  const TrackResult r = tracker.Align(frame_, Perturb(truth_, d));
+  ASSERT_GT(r.summary.num_levels, 1);
+  int coarse_rounds = 0;
+  for (int level = 1; level < r.summary.num_levels; ++level) {
+    coarse_rounds += r.summary.iterations_per_level[level];
+  }
+  EXPECT_GT(coarse_rounds, r.summary.num_levels - 1) << r.BriefReport();
+  EXPECT_LT(Difference(r.world_from_obj, truth_).translation, 0.002) << r.BriefReport();
+}
+
 TEST_F(ModalityScene, RegionAloneTracksAnUntexturedModel) {
   Tracker tracker(rig_, flat_);  // defaults: no photometric rows for a flat model
   tracker.Initialize(truth_);

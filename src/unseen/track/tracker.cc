@@ -438,7 +438,12 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
                              ? po.max_iterations_per_level
                              : std::min(po.max_iterations_per_level, po.coarse_max_iterations);
     if (span.max_iterations > 0) max_iterations = std::min(max_iterations, span.max_iterations);
-    const double min_update_px = level == 0 ? po.min_update_px : po.coarse_min_update_px;
+    // The first frame's checks measure how far each modality pulls the given pose (the
+    // appearance's drag): there the coarse levels run to the stricter stop.
+    const bool texture_leads = PhotometricJudges() && !learn_from_start_;
+    const double min_update_px = level == 0      ? po.min_update_px
+                                 : texture_leads ? po.photometric_coarse_min_update_px
+                                                 : po.coarse_min_update_px;
     for (int iteration = 0; iteration < max_iterations; ++iteration) {
       ++s.renders;
       const Rigid3d round_pose = pose;

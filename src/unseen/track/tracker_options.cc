@@ -25,6 +25,9 @@ void PyramidOptions::Check() const {
                "pyramid.coarse_max_iterations {} must be in [1, 100]", coarse_max_iterations);
   UNSEEN_CHECK(coarse_min_update_px >= 0.0 && std::isfinite(coarse_min_update_px),
                "pyramid.coarse_min_update_px {} must be >= 0", coarse_min_update_px);
+  UNSEEN_CHECK(
+      photometric_coarse_min_update_px >= 0.0 && std::isfinite(photometric_coarse_min_update_px),
+      "pyramid.photometric_coarse_min_update_px {} must be >= 0", photometric_coarse_min_update_px);
   UNSEEN_CHECK(max_step_px > 0.0 && std::isfinite(max_step_px),
                "pyramid.max_step_px {} must be > 0", max_step_px);
   UNSEEN_CHECK(resample_iterations >= 0 && resample_iterations <= 100,
@@ -224,6 +227,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"min_update_px", YamlField(&py.min_update_px)},
         {"coarse_max_iterations", YamlField(&py.coarse_max_iterations)},
         {"coarse_min_update_px", YamlField(&py.coarse_min_update_px)},
+        {"photometric_coarse_min_update_px", YamlField(&py.photometric_coarse_min_update_px)},
         {"max_step_px", YamlField(&py.max_step_px)},
         {"resample_iterations", YamlField(&py.resample_iterations)},
         {"rerender_px", YamlField(&py.rerender_px)},

@@ -28,7 +28,8 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
       "preprocess: {use_linf: false, blur_sigma_px: 2.5}\n"
       "selection: {color_mode: raw, use_occlusion_rejection: false, block_min_share_ratio: 0}\n"
       "solver: {kernel: tukey, kernel_width: 4.685}\n"
-      "pyramid: {max_levels: 2, adaptive_levels: false, min_adaptive_levels: 1, capture_px: 3}\n"
+      "pyramid: {max_levels: 2, adaptive_levels: false, min_adaptive_levels: 1, capture_px: 3,\n"
+      "          photometric_coarse_min_update_px: 0.5}\n"
       "predictor: {type: none, min_confidence: 0.4, confidence_power: 2}\n"
       "failure: {lost_after_frames: 5, good_used_px: 3000, bad_residual_ratio: 2.0}\n"
       "frame_interval_s: 0.04\n"
@@ -43,6 +44,8 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
   EXPECT_FALSE(o.pyramid.adaptive_levels);
   EXPECT_EQ(o.pyramid.min_adaptive_levels, 1);
   EXPECT_EQ(o.pyramid.capture_px, 3.0);
+  EXPECT_DOUBLE_EQ(o.pyramid.photometric_coarse_min_update_px, 0.5);
+  EXPECT_DOUBLE_EQ(o.pyramid.coarse_min_update_px, 0.3);  // untouched default
   EXPECT_EQ(o.predictor.type, PredictorType::kHold);
   EXPECT_DOUBLE_EQ(o.predictor.min_confidence, 0.4);
   EXPECT_DOUBLE_EQ(o.predictor.confidence_power, 2.0);
@@ -126,6 +129,9 @@ TEST(TrackerOptions, RejectsBadFilesNamingTheKey) {
   EXPECT_NE(message("pyramid: {resample_iterations: -1}").find("pyramid.resample_iterations"),
             std::string::npos);
   EXPECT_NE(message("pyramid: {rerender_px: .nan}").find("pyramid.rerender_px"), std::string::npos);
+  EXPECT_NE(message("pyramid: {photometric_coarse_min_update_px: -1}")
+                .find("pyramid.photometric_coarse_min_update_px"),
+            std::string::npos);
   EXPECT_NE(message("pyramid: {resample_margin_px: 100}").find("pyramid.resample_margin_px"),
             std::string::npos);
   EXPECT_NE(message("failure: {min_area_ratio: 0.5, good_area_ratio: 0.4}").find("min_area_ratio"),

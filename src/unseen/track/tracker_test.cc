@@ -82,6 +82,22 @@ TEST_F(TrackerScene, RecoversACombinedOffset) {
   EXPECT_LT(e.rotation_rad, 0.2 * kDeg) << r.BriefReport();
 }
 
+TEST_F(TrackerScene, CoarseLevelsStopOnTheirOwnUpdateWhileTheTextureLeads) {
+  Vector6d d;
+  d << 0.006, -0.005, 0.02, 3 * kDeg, -3 * kDeg, 2 * kDeg;
+  TrackerOptions o;
+  o.pyramid.photometric_coarse_min_update_px = 1e3;  // one round per coarse level
+  Tracker textured(rig_, cube_, o);
+  const TrackResult r = textured.Align({image_}, Perturb(truth_, d));
+  ASSERT_GT(r.summary.num_levels, 1);
+  for (int level = 1; level < r.summary.num_levels; ++level) {
+    EXPECT_EQ(r.summary.iterations_per_level[level], 1) << "level " << level;
+  }
+  EXPECT_LT(Difference(r.world_from_obj, truth_).translation, 0.001) << r.BriefReport();
+  // (Led by the other modalities the coarse levels keep coarse_min_update_px:
+  // modalities_test's DepthLedCoarseLevelsKeepTheirStricterStop.)
+}
+
 TEST_F(TrackerScene, StartingAtTheTruthStaysThere) {
   Tracker tracker(rig_, cube_);
   for (int levels : {1, 2, 3}) {
