@@ -129,7 +129,7 @@ void AddModelCommand(CLI::App& app) {
   cmd->add_option("--mask", args->object.mask, "Object mask image (non-zero = object)");
   cmd->add_option("--depth", args->object.depth,
                   "Depth source: planesweep, stereo or sensor (default: sensor with depth "
-                  "images, else planesweep)");
+                  "images, else stereo for two cameras, else planesweep)");
   cmd->add_option("--config", args->object.model_config, "Modeller options (YAML)");
   cmd->add_option("--out", args->out, "Model file to write (.ply/.obj, millimetres)")->required();
   cmd->add_option("--debug-dir", args->debug_dir,

@@ -32,12 +32,11 @@ PixelRect ParseRoi(const std::string& text, const std::string& command) {
 
 ModellerOptions ModellerOptionsFor(const UnknownObjectArgs& args, const Sequence& sequence,
                                    const std::string& command) {
-  // The sequence's natural source (its depth images, else the plane sweep over its
-  // cameras), under what the file and --depth say.
+  // The sequence's natural source (its depth images, else stereo for a pair, else the
+  // plane sweep over its cameras), under what the file and --depth say.
   ModellerOptions options;
-  options.depth.source = sequence.has_depth()         ? DepthSourceKind::kSensor
-                         : sequence.rig().size() >= 2 ? DepthSourceKind::kPlaneSweep
-                                                      : DepthSourceKind::kSensor;
+  options.depth.source =
+      NaturalDepthSource(sequence.rig(), sequence.reference_camera(), sequence.has_depth());
   if (!args.model_config.empty()) options = LoadModellerOptions(args.model_config, options);
   if (!args.depth.empty()) {
     try {

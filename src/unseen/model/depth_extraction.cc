@@ -105,6 +105,17 @@ class SensorDepth : public DepthSource {
 
 }  // namespace
 
+DepthSourceKind NaturalDepthSource(const Rig& rig, int reference, bool has_depth) {
+  if (has_depth || rig.size() < 2) return DepthSourceKind::kSensor;
+  if (rig.size() > 2) return DepthSourceKind::kPlaneSweep;
+  const RigCamera& ref = rig.cameras[reference];
+  const RigCamera& other = rig.cameras[reference == 0 ? 1 : 0];
+  // The baseline in the reference camera's frame: the matcher wants it across the rows.
+  const Eigen::Vector3d baseline = ref.cam_from_world() * other.world_from_cam.translation();
+  return std::abs(baseline.x()) >= std::abs(baseline.y()) ? DepthSourceKind::kStereo
+                                                          : DepthSourceKind::kPlaneSweep;
+}
+
 std::unique_ptr<DepthSource> MakeDepthSource(const Rig& rig, int reference,
                                              const DepthExtractionOptions& options) {
   options.Check();

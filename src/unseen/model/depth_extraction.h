@@ -59,11 +59,16 @@ struct PlaneSweepOptions {
 };
 
 struct StereoOptions {
-  int num_disparities = 128;  // multiple of 16 (OpenCV)
+  int num_disparities = 256;  // at most, a multiple of 16 (OpenCV)
   int block_size = 5;         // odd, >= 3
   int uniqueness_ratio = 10;  // per cent
   int speckle_window = 100;   // px; 0 = no speckle filtering
   int speckle_range = 2;      // disparity units
+  // The disparities searched reach past the object's depth band towards the background, up
+  // to num_disparities in all: searched over the band alone, a background with a repeating
+  // pattern (tiles, shelves, a chessboard) finds a wrong match inside it and joins the
+  // object at its depth. Pixels matched outside the band are dropped either way.
+  bool search_behind = true;
   std::string other_camera;   // the second camera; empty: the first that is not the reference
   void Check() const;
 };
@@ -126,6 +131,13 @@ class DepthSource {
                            double far_m = 0.0) const = 0;
   virtual DepthSourceKind kind() const = 0;
 };
+
+// The source a rig calls for when none is chosen: its depth images (`has_depth`); else
+// stereo for two cameras side by side (rectification and semi-global matching, which
+// searches past the object's depth band); else the plane sweep over every camera (three or
+// more, or a pair stacked vertically); kSensor for one camera without depth (which
+// MakeDepthSource then refuses).
+DepthSourceKind NaturalDepthSource(const Rig& rig, int reference, bool has_depth);
 
 // The source options.source for `rig` seen from camera `reference` (checked: the plane
 // sweep needs two cameras or more, stereo two, with overlapping views).

@@ -5,10 +5,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
+#include "unseen/mesh/primitives.h"
 #include "unseen/model/stereo_depth.h"
 #include "unseen/model/test_rig_scene.h"
+#include "unseen/render/rasterizer.h"
 #include "unseen/util/error.h"
 
 namespace unseen {
@@ -104,6 +107,82 @@ INSTANTIATE_TEST_SUITE_P(AllSources, DepthSources,
                          CaseName);
 
 // The sweep's tiles are independent: spread over threads, the map is the same to the bit.
+// Two cameras 80 mm apart (f = 400 px) see the cube 0.6 m ahead before a wall 1 m away
+// tiled every 40 mm (16 px in the images) with the same random pattern: over the cube's
+// depth band alone (0.55-0.7 m, disparities 46-58) the wall matches one tile over, at
+// disparity 48 (0.67 m), and joins the object; searched past the band, it matches at its
+// own disparity 32 and is dropped.
+TEST(DepthExtraction, StereoDoesNotMistakeATiledWallForTheObject) {
+  const PinholeCamera cam = PinholeCamera::Centered(320, 240, 400.0);
+  Rig rig;
+  rig.cameras.push_back({"left", cam, Rigid3d()});
+  rig.cameras.push_back(
+      {"right", cam, Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.08, 0.0, 0.0))});
+  const Mesh cube = MakeLetteredCube(0.1, 128);
+  const Rigid3d world_from_obj(
+      Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitY()) *
+          Eigen::Quaterniond(Eigen::AngleAxisd(-0.4, Eigen::Vector3d::UnitX())),
+      Eigen::Vector3d(0.0, 0.0, 0.6));
+  cv::Mat tile(16, 16, CV_32FC1);
+  cv::RNG rng(7);
+  rng.fill(tile, cv::RNG::UNIFORM, 0.1, 0.9);
+  Frame frame;
+  cv::Mat object_mask;
+  for (const RigCamera& c : rig.cameras) {
+    const double offset_px = c.world_from_cam.translation().x() * cam.fx;  // at 1 m
+    cv::Mat image(cam.height, cam.width, CV_32FC3);
+    for (int y = 0; y < cam.height; ++y) {
+      for (int x = 0; x < cam.width; ++x) {
+        const int u = static_cast<int>(std::lround(x + offset_px)) + 1600;
+        const float v = tile.at<float>(y % 16, u % 16);
+        image.at<cv::Vec3f>(y, x) = cv::Vec3f(v, v, v);
+      }
+    }
+    RenderBuffers seen;
+    Render(cube, cam, c.cam_from_world() * world_from_obj, cam.ImageRect(), RenderOptions(), &seen);
+    seen.color.copyTo(image, seen.mask);
+    frame.images.push_back(image);
+    if (object_mask.empty()) object_mask = seen.mask.clone();
+  }
+  const std::optional<PixelRect> region = cam.SphereRect(world_from_obj.translation(), 0.12);
+  ASSERT_TRUE(region.has_value());
+  auto count = [&](bool search_behind, int* on_object, int* off_object) {
+    DepthExtractionOptions options;
+    options.source = DepthSourceKind::kStereo;
+    options.stereo.search_behind = search_behind;
+    const DepthMap map = StereoDepth(rig, 0, options).Extract(frame, *region, 0.55, 0.7);
+    *on_object = *off_object = 0;
+    for (int y = 0; y < cam.height; ++y) {
+      for (int x = 0; x < cam.width; ++x) {
+        if (map.depth.at<float>(y, x) <= 0.0f) continue;
+        ++(object_mask.at<uint8_t>(y, x) ? *on_object : *off_object);
+      }
+    }
+  };
+  int band_on = 0, band_off = 0, behind_on = 0, behind_off = 0;
+  count(false, &band_on, &band_off);
+  count(true, &behind_on, &behind_off);
+  EXPECT_GT(band_off, 5000) << "the band-only search no longer mistakes the wall";
+  EXPECT_LT(behind_off, band_off / 10);
+  EXPECT_GT(behind_on, band_on / 2) << "the cube is still measured";
+}
+
+TEST(DepthExtraction, TheNaturalSourceFollowsTheRig) {
+  const RigScene s = MakeRigScene();  // left, right 80 mm to its right, top 50 mm up
+  EXPECT_EQ(NaturalDepthSource(s.rig, 0, /*has_depth=*/true), DepthSourceKind::kSensor);
+  EXPECT_EQ(NaturalDepthSource(s.rig, 0, false), DepthSourceKind::kPlaneSweep);
+  Rig pair = s.rig;
+  pair.cameras.pop_back();
+  EXPECT_EQ(NaturalDepthSource(pair, 0, false), DepthSourceKind::kStereo);
+  EXPECT_EQ(NaturalDepthSource(pair, 1, false), DepthSourceKind::kStereo);
+  Rig stacked = pair;
+  stacked.cameras[1].world_from_cam =
+      Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.01, 0.08, 0.0));
+  EXPECT_EQ(NaturalDepthSource(stacked, 0, false), DepthSourceKind::kPlaneSweep);
+  pair.cameras.pop_back();
+  EXPECT_EQ(NaturalDepthSource(pair, 0, false), DepthSourceKind::kSensor);
+}
+
 TEST(DepthExtraction, PlaneSweepGivesTheSameMapOnAnyNumberOfThreads) {
   const RigScene s = MakeRigScene();
   DepthExtractionOptions options;

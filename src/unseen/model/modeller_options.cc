@@ -215,6 +215,7 @@ ModellerOptions FromYaml(const YAML::Node& root, const std::string& what, Modell
         {"uniqueness_ratio", YamlField(&st.uniqueness_ratio)},
         {"speckle_window", YamlField(&st.speckle_window)},
         {"speckle_range", YamlField(&st.speckle_range)},
+        {"search_behind", YamlField(&st.search_behind)},
         {"other_camera", YamlField(&st.other_camera)}}},
       {"segmentation",
        {{"max_radius_m", YamlField(&sg.max_radius_m)},

@@ -94,7 +94,7 @@ DepthMap StereoDepth::Extract(const Frame& frame, const PixelRect& roi, double n
   // reference is the left image.
   const bool mirrored = tx > 0.0;
 
-  // Rows of the rectified images the region maps to, with the matcher's margin.
+  // The region's corners in the rectified reference image.
   const Eigen::Matrix3d rect = [&] {
     Eigen::Matrix3d m;
     for (int i = 0; i < 3; ++i) {
@@ -108,35 +108,66 @@ DepthMap StereoDepth::Extract(const Frame& frame, const PixelRect& roi, double n
     *ray = rect * (kref_inv * Eigen::Vector3d(u, v, 1.0));
     return Eigen::Vector2d(f * ray->x() / ray->z() + pcx, f * ray->y() / ray->z() + pcy);
   };
-  double y_min = 1e9, y_max = -1e9;
+  double x_min = 1e9, x_max = -1e9, y_min = 1e9, y_max = -1e9;
   for (double u : {double(r.x0), double(r.x1 - 1)}) {
     for (double v : {double(r.y0), double(r.y1 - 1)}) {
       Eigen::Vector3d ray;
       const Eigen::Vector2d p = rectified(u, v, &ray);
+      x_min = std::min(x_min, p.x());
+      x_max = std::max(x_max, p.x());
       y_min = std::min(y_min, p.y());
       y_max = std::max(y_max, p.y());
     }
   }
+
+  // Disparities of the depth range and, with search_behind, beyond it towards
+  // max_depth_m, as many as num_disparities allows (the range's own first).
+  const int band_min = std::max(0, static_cast<int>(std::floor(fb / far)));
+  const int band_max = static_cast<int>(std::ceil(fb / near));
+  int min_disparity = band_min;
+  if (o.search_behind) {
+    const int deepest = std::max(0, static_cast<int>(std::floor(fb / options_.max_depth_m)));
+    min_disparity = std::min(band_min, std::max(deepest, band_max + 1 - o.num_disparities));
+  }
+  const int wanted = band_max - min_disparity + 1;
+  const int num_disparities = std::clamp((wanted + 15) / 16 * 16, 16, o.num_disparities);
+  const int max_disparity = min_disparity + num_disparities;
+
+  // The rectified images over the region's rows and the columns its matches can reach (the
+  // matcher's cost grows with the width it is given), with the matcher's margin.
   const int margin = o.block_size + 2;
   const int row0 = std::clamp(static_cast<int>(std::floor(y_min)) - margin, 0, size.height - 1);
   const int row1 =
       std::clamp(static_cast<int>(std::ceil(y_max)) + margin + 1, row0 + 1, size.height);
+  // The reference's pixel x matches the other's at x - d (the other to the right, tx < 0)
+  // or at x + d (mirrored).
+  const int reach_left = mirrored ? 0 : max_disparity;
+  const int reach_right = mirrored ? max_disparity : 0;
+  const int col0 =
+      std::clamp(static_cast<int>(std::floor(x_min)) - reach_left - margin, 0, size.width - 1);
+  const int col1 = std::clamp(static_cast<int>(std::ceil(x_max)) + reach_right + margin + 1,
+                              col0 + 1, size.width);
 
   cv::Mat map1x, map1y, map2x, map2y, ref_rect, other_rect;
   cv::initUndistortRectifyMap(k1, cv::noArray(), r1, p1, size, CV_32FC1, map1x, map1y);
   cv::initUndistortRectifyMap(k2, cv::noArray(), r2, p2, size, CV_32FC1, map2x, map2y);
-  const cv::Rect band(0, row0, size.width, row1 - row0);
-  cv::remap(To8U(ref_grey), ref_rect, map1x(band), map1y(band), cv::INTER_LINEAR);
-  cv::remap(To8U(other_grey), other_rect, map2x(band), map2y(band), cv::INTER_LINEAR);
+  const cv::Rect window(col0, row0, col1 - col0, row1 - row0);
+  cv::remap(To8U(ref_grey), ref_rect, map1x(window), map1y(window), cv::INTER_LINEAR);
+  cv::remap(To8U(other_grey), other_rect, map2x(window), map2y(window), cv::INTER_LINEAR);
   if (mirrored) {
     cv::flip(ref_rect, ref_rect, 1);
     cv::flip(other_rect, other_rect, 1);
   }
-
-  // Disparities of the depth range only.
-  const int min_disparity = std::max(0, static_cast<int>(std::floor(fb / far)));
-  const int wanted = static_cast<int>(std::ceil(fb / near)) - min_disparity + 1;
-  const int num_disparities = std::clamp((wanted + 15) / 16 * 16, 16, o.num_disparities);
+  // The matcher leaves its first min_disparity + num_disparities columns unmatched: where the
+  // image ends closer to the region than that, the pair is padded so that the region's own
+  // columns are matched (a match off the other image then fails the uniqueness test).
+  const int room = mirrored ? col1 - 1 - static_cast<int>(std::ceil(x_max))
+                            : static_cast<int>(std::floor(x_min)) - col0;
+  const int pad = std::max(0, max_disparity + margin - room);
+  if (pad > 0) {
+    cv::copyMakeBorder(ref_rect, ref_rect, 0, 0, pad, 0, cv::BORDER_REPLICATE);
+    cv::copyMakeBorder(other_rect, other_rect, 0, 0, pad, 0, cv::BORDER_REPLICATE);
+  }
   const int cn = 1;
   cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
       min_disparity, num_disparities, o.block_size, 8 * cn * o.block_size * o.block_size,
@@ -144,6 +175,7 @@ DepthMap StereoDepth::Extract(const Frame& frame, const PixelRect& roi, double n
       o.speckle_range, cv::StereoSGBM::MODE_SGBM);
   cv::Mat disparity16;
   sgbm->compute(ref_rect, other_rect, disparity16);
+  disparity16 = disparity16.colRange(pad, disparity16.cols);
   if (mirrored) cv::flip(disparity16, disparity16, 1);
 
   // Each reference pixel's rectified position, its disparity there, its point back in the
@@ -151,7 +183,7 @@ DepthMap StereoDepth::Extract(const Frame& frame, const PixelRect& roi, double n
   ForEachTexturedPixel(&out, r, options_.min_texturedness, [&](int x, int y, float* depth) {
     Eigen::Vector3d ray;
     const Eigen::Vector2d p = rectified(x, y, &ray);
-    const int px = static_cast<int>(std::lround(p.x()));
+    const int px = static_cast<int>(std::lround(p.x())) - col0;
     const int py = static_cast<int>(std::lround(p.y())) - row0;
     if (px < 0 || px >= disparity16.cols || py < 0 || py >= disparity16.rows) return;
     const int d16 = disparity16.at<int16_t>(py, px);
