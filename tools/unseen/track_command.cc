@@ -58,6 +58,7 @@ struct TrackArgs {
   UnknownObjectArgs object;  // --roi, --mask, --depth, --model-config (init: --init)
   std::string update = "incremental";
   int update_frames = 30;
+  double update_refresh = ModelUpdateOptions().refresh_confidence;
   bool update_in_frame = false;
   std::string save_model;
 };
@@ -146,11 +147,12 @@ void RunTrack(const TrackArgs& args) {
       ThrowError("track: --update: {}", e.what());
     }
     update.every_frames = args.update_frames;
+    update.refresh_confidence = args.update_refresh;
     update.asynchronous = !args.update_in_frame;
     try {
       update.Check();
     } catch (const Error& e) {
-      ThrowError("track: --update-frames: {}", e.what());
+      ThrowError("track: --update-frames, --update-refresh: {}", e.what());
     }
     updater = std::make_unique<ModelUpdater>(modeller.get(), update);
     model = updater->Start(build);
@@ -330,7 +332,7 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_option("--mask", args->object.mask, "--unknown: object mask image (non-zero = object)");
   cmd->add_option("--depth", args->object.depth,
                   "--unknown: depth source planesweep, stereo or sensor (default: sensor with "
-                  "depth images, else planesweep)");
+                  "depth images, else stereo for two cameras, else planesweep)");
   cmd->add_option("--model-config", args->object.model_config,
                   "--unknown: modeller options (YAML)");
   cmd->add_option("--update", args->update,
@@ -339,6 +341,9 @@ void AddTrackCommand(CLI::App& app) {
                   "thesis's) or none");
   cmd->add_option("--update-frames", args->update_frames,
                   "--unknown: frames between model rebuilds");
+  cmd->add_option("--update-refresh", args->update_refresh,
+                  "--unknown: rebuild sooner (after 5 frames) once a frame's confidence falls "
+                  "below this (0: every --update-frames only)");
   cmd->add_flag("--update-in-frame", args->update_in_frame,
                 "--unknown: build each new model within its frame instead of beside the "
                 "tracking (reproducible runs; the frame's time includes the build)");

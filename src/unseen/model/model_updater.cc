@@ -33,6 +33,9 @@ ModelUpdateMode ParseModelUpdateMode(const std::string& text) {
 
 void ModelUpdateOptions::Check() const {
   UNSEEN_CHECK(every_frames >= 1, "update.every_frames {} must be >= 1", every_frames);
+  UNSEEN_CHECK(refresh_confidence >= 0.0 && refresh_confidence <= 1.0,
+               "update.refresh_confidence {} must be in [0, 1]", refresh_confidence);
+  UNSEEN_CHECK(refresh_frames >= 1, "update.refresh_frames {} must be >= 1", refresh_frames);
   UNSEEN_CHECK(min_confidence >= 0.0 && min_confidence <= 1.0,
                "update.min_confidence {} must be in [0, 1]", min_confidence);
 }

@@ -34,6 +34,14 @@ struct ModelUpdateOptions {
   ModelUpdateMode mode = ModelUpdateMode::kIncremental;
   int every_frames = 30;        // frames between model builds (thesis: n = 30)
   double min_confidence = 0.8;  // a frame tracked at least this confidently is modelled
+  // A build is due sooner, after refresh_frames, on a frame whose confidence has fallen
+  // below refresh_confidence (still at least min_confidence): the model explains the
+  // images less well than it did (the object turned a side the model lacks into view, the
+  // light moved), and left until every_frames it would lose the object first (a model of
+  // one view of a turning truck: confidence 1.0 -> 0.2 in 16 frames at a pose 1-2 mm off).
+  // refresh_confidence 0: only every_frames.
+  double refresh_confidence = 0.9;
+  int refresh_frames = 5;
   bool asynchronous = true;     // build beside the tracking (false: within the frame)
   void Check() const;
 };
@@ -87,7 +95,10 @@ class ModelUpdater {
 
  private:
   bool DueAfter(int frames_since_model, double confidence) const {
-    return frames_since_model >= options_.every_frames && confidence >= options_.min_confidence;
+    if (confidence < options_.min_confidence) return false;
+    return frames_since_model >= options_.every_frames ||
+           (frames_since_model >= options_.refresh_frames &&
+            confidence < options_.refresh_confidence);
   }
   std::optional<Mesh> Collect(ModelBuild build);
   // Modeller::Build, then with kIncremental the fusion of its depth (on the build's thread:

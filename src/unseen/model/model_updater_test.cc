@@ -54,6 +54,29 @@ TEST_F(ModelUpdates, EveryNthConfidentFrameGivesANewModel) {
   EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 1.0, model_));
 }
 
+TEST_F(ModelUpdates, AFallingConfidenceBringsTheNextBuildForward) {
+  update_.every_frames = 30;
+  update_.refresh_frames = 5;
+  update_.refresh_confidence = 0.9;
+  ModelUpdater updater(modeller_.get(), update_);
+  // Confident frames, then one less so but too soon after the model.
+  for (double confidence : {1.0, 1.0, 0.85, 1.0}) {
+    EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, confidence, model_));
+  }
+  // Too doubtful to model, then 0.85 after five frames: the model is refreshed now.
+  EXPECT_FALSE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 0.5, model_));
+  EXPECT_TRUE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 0.85, model_).has_value());
+  EXPECT_EQ(updater.stats().started, 1);
+
+  // Without the refresh, only every_frames.
+  update_.refresh_confidence = 0.0;
+  ModelUpdater every_30(modeller_.get(), update_);
+  for (int i = 0; i < 29; ++i) {
+    EXPECT_FALSE(every_30.AfterFrame(scene_.frame, scene_.world_from_obj, 0.85, model_));
+  }
+  EXPECT_TRUE(every_30.AfterFrame(scene_.frame, scene_.world_from_obj, 0.85, model_).has_value());
+}
+
 TEST_F(ModelUpdates, AFrameThatCannotBeModelledKeepsTheModelInUse) {
   ModelUpdater updater(modeller_.get(), update_);
   Frame no_depth = scene_.frame;
@@ -128,6 +151,12 @@ TEST_F(ModelUpdates, NoneNeverRebuildsAndBadOptionsAreErrors) {
   EXPECT_EQ(updater.stats().started, 0);
   EXPECT_THROW(ParseModelUpdateMode("incrementally"), Error);
   update_.every_frames = 0;
+  EXPECT_THROW(update_.Check(), Error);
+  update_.every_frames = 3;
+  update_.refresh_confidence = 1.5;
+  EXPECT_THROW(update_.Check(), Error);
+  update_.refresh_confidence = 0.9;
+  update_.refresh_frames = 0;
   EXPECT_THROW(update_.Check(), Error);
 }
 

@@ -93,6 +93,8 @@ YamlSection UpdateSection(ModelUpdateOptions* o) {
            }},
           {"every_frames", YamlField(&o->every_frames)},
           {"min_confidence", YamlField(&o->min_confidence)},
+          {"refresh_confidence", YamlField(&o->refresh_confidence)},
+          {"refresh_frames", YamlField(&o->refresh_frames)},
           {"asynchronous", YamlField(&o->asynchronous)}};
 }
 
