@@ -234,7 +234,7 @@ TEST_F(ModellerScene, WhatCannotBeModelledIsAStatusNotAnEmptyModel) {
 TEST(ModellerOptionsYaml, ReadsEverySectionAndNamesWhatIsWrong) {
   const ModellerOptions o = ParseModellerOptions(
       "depth: {source: stereo, max_depth_m: 2.5}\n"
-      "stereo: {num_disparities: 64, other_camera: right}\n"
+      "stereo: {num_disparities: 64, other_camera: right, search_behind: false}\n"
       "plane_sweep: {planes: 32, disparity_step_px: 1.5}\n"
       "segmentation: {max_radius_m: 0.2, remove_support_plane: false}\n"
       "mesh: {cell_px: 8, contour_vertices: false}\n"
@@ -243,6 +243,7 @@ TEST(ModellerOptionsYaml, ReadsEverySectionAndNamesWhatIsWrong) {
   EXPECT_EQ(o.depth.source, DepthSourceKind::kStereo);
   EXPECT_EQ(o.depth.max_depth_m, 2.5);
   EXPECT_EQ(o.depth.stereo.num_disparities, 64);
+  EXPECT_FALSE(o.depth.stereo.search_behind);
   EXPECT_EQ(o.depth.stereo.other_camera, "right");
   EXPECT_EQ(o.depth.plane_sweep.planes, 32);
   EXPECT_EQ(o.depth.plane_sweep.disparity_step_px, 1.5);

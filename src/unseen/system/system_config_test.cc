@@ -46,7 +46,8 @@ filters:
 segmentation: {block_px: 16, remove_dominant_motion: true}
 selection: {min_area_px: 300, rank_by_total_interest: false}
 known_pose: {max_candidates: 5, rolls: 8, gradient_saturation: 0.5}
-update: {mode: periodic, every_frames: 12, asynchronous: false}
+update: {mode: periodic, every_frames: 12, refresh_confidence: 0.7, refresh_frames: 3,
+         asynchronous: false}
 )",
                                                 "cfg.yaml");
   EXPECT_EQ(config.system.regions, RegionSource::kInterest);
@@ -66,6 +67,8 @@ update: {mode: periodic, every_frames: 12, asynchronous: false}
   EXPECT_DOUBLE_EQ(config.system.known_pose.views.gradient_saturation, 0.5);
   EXPECT_EQ(config.system.update.mode, ModelUpdateMode::kPeriodic);
   EXPECT_EQ(config.system.update.every_frames, 12);
+  EXPECT_DOUBLE_EQ(config.system.update.refresh_confidence, 0.7);
+  EXPECT_EQ(config.system.update.refresh_frames, 3);
   EXPECT_FALSE(config.system.update.asynchronous);
 }
 
