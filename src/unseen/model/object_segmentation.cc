@@ -245,7 +245,7 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
   // the origin is the object's, and the pixels within sparse_fill_px of it its area. Wrong
   // matches on the background (a periodic pattern matches at many depths, some near the
   // origin's) form small components of their own.
-  cv::Mat labels(size, CV_32SC1, cv::Scalar(0));
+  cv::Mat labels(rect.size(), CV_32SC1, cv::Scalar(0));  // over the region, from rect.tl()
   const int gap = options.sparse_gap_px;
   int best_label = 0, best_count = 0;
   int next_label = 0;
@@ -257,10 +257,10 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
   for (int k = 0; k < r.height(); ++k) row_begin[k + 1] += row_begin[k];
   auto x_less = [](const cv::Point& a, int x) { return a.x < x; };
   for (size_t i = 0; i < points.size(); ++i) {
-    if (!out.at<uint8_t>(pixels[i]) || labels.at<int>(pixels[i]) != 0) continue;
+    if (!out.at<uint8_t>(pixels[i]) || labels.at<int>(pixels[i] - rect.tl()) != 0) continue;
     const int label = ++next_label;
     std::vector<cv::Point> stack{pixels[i]};
-    labels.at<int>(pixels[i]) = label;
+    labels.at<int>(pixels[i] - rect.tl()) = label;
     int count = 0;
     bool near_origin = false;
     while (!stack.empty()) {
@@ -276,7 +276,7 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
       for (int y = std::max(p.y - gap, r.y0); y <= std::min(p.y + gap, r.y1 - 1); ++y) {
         const float* depth_row = depth_map.depth.ptr<float>(y);
         const uint8_t* out_row = out.ptr<uint8_t>(y);
-        int* label_row = labels.ptr<int>(y);
+        int* label_row = labels.ptr<int>(y - r.y0) - r.x0;  // indexed by image x
         const auto row_end = pixels.begin() + row_begin[y - r.y0 + 1];
         for (auto q =
                  std::lower_bound(pixels.begin() + row_begin[y - r.y0], row_end, x_begin, x_less);
@@ -293,7 +293,7 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
       best_label = label;
     }
   }
-  const cv::Mat component = (labels(rect) == best_label) & (depth_region > 0.0f);
+  const cv::Mat component = (labels == best_label) & (depth_region > 0.0f);
   const int reached = best_label > 0 ? best_count : 0;
   rep.unconnected = before - reached;
   // Dilated over the region only (out is empty beyond it).
