@@ -24,19 +24,21 @@ struct Surfel {
 struct Plane {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
   double offset = 0.0;  // normal . p + offset = 0
-  // SegmentationOptions::plane_tolerance_m and the cosine of plane_normal_deg, computed
-  // once: Holds runs for every point of every RANSAC hypothesis.
-  double tolerance_m = 0.0;
-  double min_normal_dot = 1.0;
-  Plane() = default;
-  explicit Plane(const SegmentationOptions& o)
+};
+
+// Whether a point lies on a plane: near it and facing its way (a surface that only crosses
+// the plane, as the table beside a box's face crosses the face's plane, is not on it).
+// SegmentationOptions::plane_tolerance_m and the cosine of plane_normal_deg are taken once:
+// the test runs for every point of every RANSAC hypothesis.
+struct PlaneTest {
+  double tolerance_m;
+  double min_normal_dot;
+  explicit PlaneTest(const SegmentationOptions& o)
       : tolerance_m(o.plane_tolerance_m),
         min_normal_dot(std::cos(o.plane_normal_deg * M_PI / 180.0)) {}
-  // On the plane: near it and facing its way (a surface that only crosses the plane, as
-  // the table beside a box's face crosses the face's plane, is not on it).
-  bool Holds(const Surfel& s) const {
-    return std::abs(normal.dot(s.p) + offset) < tolerance_m &&
-           std::abs(normal.dot(s.n)) >= min_normal_dot;
+  bool Holds(const Plane& plane, const Surfel& s) const {
+    return std::abs(plane.normal.dot(s.p) + plane.offset) < tolerance_m &&
+           std::abs(plane.normal.dot(s.n)) >= min_normal_dot;
   }
 };
 
@@ -53,8 +55,8 @@ std::optional<Plane> DominantPlane(const std::vector<Surfel>& points,
   std::uniform_int_distribution<size_t> pick(0, candidates.size() - 1);
   // Scored on an even subsample of at most 2 000 points.
   const size_t stride = std::max<size_t>(1, candidates.size() / 2000);
-  const Plane tolerances(o);
-  Plane best = tolerances;
+  const PlaneTest on_plane(o);
+  Plane best;
   int best_inliers = 0;
   for (int it = 0; it < o.plane_iterations; ++it) {
     const Eigen::Vector3d& a = points[candidates[pick(*rng)]].p;
@@ -62,12 +64,12 @@ std::optional<Plane> DominantPlane(const std::vector<Surfel>& points,
     const Eigen::Vector3d& c = points[candidates[pick(*rng)]].p;
     const Eigen::Vector3d n = (b - a).cross(c - a);
     if (n.norm() < 1e-9) continue;
-    Plane p = tolerances;
+    Plane p;
     p.normal = n.normalized();
     p.offset = -p.normal.dot(a);
     int inliers = 0;
     for (size_t i = 0; i < candidates.size(); i += stride) {
-      inliers += p.Holds(points[candidates[i]]) ? 1 : 0;
+      inliers += on_plane.Holds(p, points[candidates[i]]) ? 1 : 0;
     }
     if (inliers > best_inliers) {
       best_inliers = inliers;
@@ -90,6 +92,7 @@ std::optional<Plane> SupportPlane(const std::vector<Surfel>& points,
                                   const Eigen::Vector3d& origin, double rim,
                                   const SegmentationOptions& o) {
   std::mt19937 rng(12345);
+  const PlaneTest on_plane(o);
   std::vector<bool> excluded(points.size(), false);
   for (int attempt = 0; attempt < 4; ++attempt) {
     const std::optional<Plane> plane = DominantPlane(points, excluded, o, &rng);
@@ -97,7 +100,7 @@ std::optional<Plane> SupportPlane(const std::vector<Surfel>& points,
     // Over `rect` only: no inlier lies beyond it, so no stretch leaves it.
     cv::Mat inliers = cv::Mat::zeros(rect.size(), CV_8UC1);
     for (size_t i = 0; i < points.size(); ++i) {
-      if (!excluded[i] && plane->Holds(points[i])) {
+      if (!excluded[i] && on_plane.Holds(*plane, points[i])) {
         inliers.at<uint8_t>(pixels[i] - rect.tl()) = 255;
       }
     }
@@ -109,7 +112,7 @@ std::optional<Plane> SupportPlane(const std::vector<Surfel>& points,
       if ((points[i].p - origin).norm() > rim) return plane;
     }
     for (size_t i = 0; i < points.size(); ++i) {
-      if (plane->Holds(points[i])) excluded[i] = true;
+      if (on_plane.Holds(*plane, points[i])) excluded[i] = true;
     }
   }
   return std::nullopt;
@@ -201,12 +204,13 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
   if (rep.dense) {
     out_region.setTo(0, depth_region <= 0.0f);
   }
+  const PlaneTest on_plane(options);
   for (size_t i = 0; i < points.size(); ++i) {
     const cv::Point& px = pixels[i];
     if ((points[i] - origin_in_cam).norm() > options.max_radius_m) {
       ++rep.beyond_radius;
       out.at<uint8_t>(px) = 0;
-    } else if (support && support->Holds(surfels[i])) {
+    } else if (support && on_plane.Holds(*support, surfels[i])) {
       ++rep.on_plane;
       out.at<uint8_t>(px) = 0;
     }
