@@ -342,8 +342,9 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_option("--update-frames", args->update_frames,
                   "--unknown: frames between model rebuilds");
   cmd->add_option("--update-refresh", args->update_refresh,
-                  "--unknown: rebuild sooner (after 5 frames) once a frame's confidence falls "
-                  "below this (0: every --update-frames only)");
+                  fmt::format("--unknown: rebuild sooner (after {} frames) once a frame's "
+                              "confidence falls below this (0: every --update-frames only)",
+                              ModelUpdateOptions().refresh_frames));
   cmd->add_flag("--update-in-frame", args->update_in_frame,
                 "--unknown: build each new model within its frame instead of beside the "
                 "tracking (reproducible runs; the frame's time includes the build)");

@@ -106,7 +106,6 @@ INSTANTIATE_TEST_SUITE_P(AllSources, DepthSources,
                                            DepthCase{DepthSourceKind::kSensor, 0}),
                          CaseName);
 
-// The sweep's tiles are independent: spread over threads, the map is the same to the bit.
 // Two cameras 80 mm apart (f = 400 px) see the cube 0.6 m ahead before a wall 1 m away
 // tiled every 40 mm (16 px in the images) with the same random pattern: over the cube's
 // depth band alone (0.55-0.7 m, disparities 46-58) the wall matches one tile over, at
@@ -183,6 +182,7 @@ TEST(DepthExtraction, TheNaturalSourceFollowsTheRig) {
   EXPECT_EQ(NaturalDepthSource(pair, 0, false), DepthSourceKind::kSensor);
 }
 
+// The sweep's tiles are independent: spread over threads, the map is the same to the bit.
 TEST(DepthExtraction, PlaneSweepGivesTheSameMapOnAnyNumberOfThreads) {
   const RigScene s = MakeRigScene();
   DepthExtractionOptions options;
