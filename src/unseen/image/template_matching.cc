@@ -50,6 +50,11 @@ MaskedTemplateMatcher::MaskedTemplateMatcher(const cv::Mat& image, cv::Size temp
 }
 
 cv::Mat MaskedTemplateMatcher::Match(const cv::Mat& templ, const cv::Mat& mask) const {
+  return Match(Prepare(templ, mask));
+}
+
+MaskedTemplateMatcher::Prepared MaskedTemplateMatcher::Prepare(const cv::Mat& templ,
+                                                               const cv::Mat& mask) const {
   UNSEEN_CHECK(templ.size() == template_size_ && templ.channels() == 1 &&
                    (templ.depth() == CV_32F || templ.depth() == CV_64F),
                "MaskedTemplateMatcher::Match: the template must be CV_32FC1 or CV_64FC1 of "
@@ -58,25 +63,41 @@ cv::Mat MaskedTemplateMatcher::Match(const cv::Mat& templ, const cv::Mat& mask) 
   UNSEEN_CHECK(mask.size() == template_size_ && mask.type() == CV_8UC1,
                "MaskedTemplateMatcher::Match: the mask must be CV_8UC1 of {}x{} (type {}, {}x{})",
                template_size_.width, template_size_.height, mask.type(), mask.cols, mask.rows);
-  const int rows = image_size_.height - template_size_.height + 1;
-  const int cols = image_size_.width - template_size_.width + 1;
-  cv::Mat scores(rows, cols, CV_32FC1, cv::Scalar(-1.0f));
+  Prepared prepared;
+  prepared.dft_size = dft_size_;
+  prepared.template_size = template_size_;
   cv::Mat m;
   cv::compare(mask, 0, m, cv::CMP_GT);
   m.convertTo(m, CV_64F, 1.0 / 255.0);
-  const double n = cv::sum(m)[0];
-  if (n < 1.0) return scores;
+  prepared.n = cv::sum(m)[0];
+  if (prepared.n < 1.0) return prepared;
   cv::Mat t;
   templ.convertTo(t, CV_64F);
-  const double mean = cv::sum(t.mul(m))[0] / n;
+  const double mean = cv::sum(t.mul(m))[0] / prepared.n;
   const cv::Mat centred = (t - mean).mul(m);
-  const double centred_energy = cv::sum(centred.mul(centred))[0];
-  if (!(centred_energy > 1e-20)) return scores;
+  prepared.centred_energy = cv::sum(centred.mul(centred))[0];
+  if (!(prepared.centred_energy > 1e-20)) return prepared;
+  prepared.mask_spectrum = PaddedSpectrum(m, dft_size_);
+  prepared.centred_spectrum = PaddedSpectrum(centred, dft_size_);
+  return prepared;
+}
 
-  const cv::Mat mask_spectrum = PaddedSpectrum(m, dft_size_);
-  const cv::Mat cross = Correlation(image_spectrum_, PaddedSpectrum(centred, dft_size_), rows);
-  const cv::Mat sums = Correlation(image_spectrum_, mask_spectrum, rows);
-  const cv::Mat squares = Correlation(squares_spectrum_, mask_spectrum, rows);
+cv::Mat MaskedTemplateMatcher::Match(const Prepared& prepared) const {
+  UNSEEN_CHECK(Fits(prepared),
+               "MaskedTemplateMatcher::Match: a template prepared for {}x{} templates and a "
+               "{}x{} transform, this matcher's are {}x{} and {}x{}",
+               prepared.template_size.width, prepared.template_size.height, prepared.dft_size.width,
+               prepared.dft_size.height, template_size_.width, template_size_.height,
+               dft_size_.width, dft_size_.height);
+  const int rows = image_size_.height - template_size_.height + 1;
+  const int cols = image_size_.width - template_size_.width + 1;
+  cv::Mat scores(rows, cols, CV_32FC1, cv::Scalar(-1.0f));
+  if (prepared.centred_spectrum.empty()) return scores;
+  const double n = prepared.n;
+  const double centred_energy = prepared.centred_energy;
+  const cv::Mat cross = Correlation(image_spectrum_, prepared.centred_spectrum, rows);
+  const cv::Mat sums = Correlation(image_spectrum_, prepared.mask_spectrum, rows);
+  const cv::Mat squares = Correlation(squares_spectrum_, prepared.mask_spectrum, rows);
   for (int y = 0; y < rows; ++y) {
     const double* c = cross.ptr<double>(y);
     const double* s = sums.ptr<double>(y);

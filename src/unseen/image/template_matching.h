@@ -31,6 +31,22 @@ class MaskedTemplateMatcher {
   // has none there or the mask is empty. Throws unseen::Error for other sizes or types.
   cv::Mat Match(const cv::Mat& templ, const cv::Mat& mask) const;
 
+  // A template's transforms for matchers of this one's image and template sizes: a template
+  // matched in many images (a series of frames) is transformed once.
+  struct Prepared {
+    cv::Size dft_size, template_size;
+    cv::Mat centred_spectrum, mask_spectrum;  // empty: the template scores -1 everywhere
+    double n = 0.0, centred_energy = 0.0;     // mask pixels, sum of T'^2
+  };
+  // The transforms of `templ` under `mask` (as Match's); Match(Prepare(t, m)) == Match(t, m).
+  Prepared Prepare(const cv::Mat& templ, const cv::Mat& mask) const;
+  // Throws unseen::Error when `prepared` was made for another DFT or template size.
+  cv::Mat Match(const Prepared& prepared) const;
+  // Whether `prepared` was made for a matcher of this one's sizes.
+  bool Fits(const Prepared& prepared) const {
+    return prepared.dft_size == dft_size_ && prepared.template_size == template_size_;
+  }
+
   cv::Size template_size() const { return template_size_; }
 
  private:

@@ -52,6 +52,28 @@ TEST(MaskedTemplateMatcher, ScoresAreOpenCvsMaskedNormalisedCorrelation) {
   EXPECT_LT(cv::norm(matcher.Match(templ, mask), matcher.Match(scaled, mask), cv::NORM_INF), 1e-5);
 }
 
+// A template prepared once is matched in a series of images (frames) of one size: the
+// scores are those of matching it afresh in each.
+TEST(MaskedTemplateMatcher, APreparedTemplateMatchesLaterImagesAsAFreshOne) {
+  const cv::Mat mask = DiscMask(31, 12);
+  const cv::Mat first = SmoothNoise(120, 130, 6);
+  const cv::Mat templ = first(cv::Rect(40, 50, 31, 31)).clone();
+  const MaskedTemplateMatcher::Prepared prepared =
+      MaskedTemplateMatcher(first, mask.size()).Prepare(templ, mask);
+  for (int seed : {7, 8}) {
+    const MaskedTemplateMatcher later(SmoothNoise(120, 130, seed), mask.size());
+    ASSERT_TRUE(later.Fits(prepared));
+    EXPECT_EQ(cv::norm(later.Match(prepared), later.Match(templ, mask), cv::NORM_INF), 0.0);
+  }
+  // Prepared for another image size or template size: refused, not misread.
+  const MaskedTemplateMatcher wider(SmoothNoise(120, 260, 6), mask.size());
+  EXPECT_FALSE(wider.Fits(prepared));
+  EXPECT_THROW(wider.Match(prepared), Error);
+  const MaskedTemplateMatcher smaller_template(first, cv::Size(21, 21));
+  EXPECT_FALSE(smaller_template.Fits(prepared));
+  EXPECT_THROW(smaller_template.Match(prepared), Error);
+}
+
 TEST(MaskedTemplateMatcher, FeaturelessImageTemplateOrMaskScoreMinusOne) {
   const cv::Mat mask = DiscMask(21, 8);
   const cv::Mat flat(60, 70, CV_32FC1, cv::Scalar(0.4));

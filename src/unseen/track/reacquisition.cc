@@ -181,31 +181,39 @@ CameraMatch MatchInWindow(const CameraWindow& w, const Mesh& model,
   template_camera.width = template_camera.height = side;
   template_camera.cx -= ox;
   template_camera.cy -= oy;
-  cv::Mat color, alpha;
-  if (templates) {
-    if (!templates->Render(template_camera, cam_from_obj, &color, &alpha)) return m;
-  } else if (!SupersampledRender(model, template_camera, cam_from_obj, &color, &alpha)) {
-    return m;
-  }
-  cv::Mat composite(side, side, CV_32FC3);
-  for (int y = 0; y < side; ++y) {
-    const float* a = alpha.ptr<float>(y);
-    const float* c = color.ptr<float>(y);
-    float* out = composite.ptr<float>(y);
-    for (int x = 0; x < side; ++x) {
-      for (int k = 0; k < 3; ++k) out[3 * x + k] = c[3 * x + k] + (1.0f - a[x]) * float(w.fill[k]);
+  CorrelationTemplateCache::Template uncached;
+  CorrelationTemplateCache::Template& t =
+      templates ? templates->Find(template_camera, cam_from_obj) : uncached;
+  if (!templates) SupersampledRender(model, template_camera, cam_from_obj, &t.color, &t.coverage);
+  if (t.color.empty()) return m;
+  double fill_moved = 0.0;
+  for (int k = 0; k < 3; ++k) fill_moved = std::max(fill_moved, std::abs(t.fill[k] - w.fill[k]));
+  if (!t.prepared || !w.matcher->Fits(*t.prepared) ||
+      fill_moved > CorrelationTemplateCache::kFillTolerance) {
+    cv::Mat composite(side, side, CV_32FC3);
+    for (int y = 0; y < side; ++y) {
+      const float* a = t.coverage.ptr<float>(y);
+      const float* c = t.color.ptr<float>(y);
+      float* out = composite.ptr<float>(y);
+      for (int x = 0; x < side; ++x) {
+        for (int k = 0; k < 3; ++k) {
+          out[3 * x + k] = c[3 * x + k] + (1.0f - a[x]) * float(w.fill[k]);
+        }
+      }
     }
+    const cv::Mat template_feature = GradientMagnitude(composite, preprocess, level);
+    // Compared over the object and its silhouette's blurred edge; the rest of the square
+    // is background, unknown.
+    cv::Mat mask;
+    cv::compare(t.coverage, 0.0, mask, cv::CMP_GT);
+    const int edge = static_cast<int>(std::ceil(preprocess.blur_sigma_px)) + 1;
+    cv::dilate(mask, mask,
+               cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * edge + 1, 2 * edge + 1)));
+    t.prepared = w.matcher->Prepare(template_feature, mask);
+    t.fill = w.fill;
   }
-  const cv::Mat template_feature = GradientMagnitude(composite, preprocess, level);
-  // Compared over the object and its silhouette's blurred edge; the rest of the square
-  // is background, unknown.
-  cv::Mat mask;
-  cv::compare(alpha, 0.0, mask, cv::CMP_GT);
-  const int edge = static_cast<int>(std::ceil(preprocess.blur_sigma_px)) + 1;
-  cv::dilate(mask, mask,
-             cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * edge + 1, 2 * edge + 1)));
   // Zero-mean normalised within the mask; -1 over a featureless part of the window.
-  m.peaks = FindPeaks(w.matcher->Match(template_feature, mask), max_peaks, w.radius_px);
+  m.peaks = FindPeaks(w.matcher->Match(*t.prepared), max_peaks, w.radius_px);
   for (Peak& p : m.peaks) p.position += Eigen::Vector2d(w.padded.x0, w.padded.y0);
   m.reference_position = Eigen::Vector2d(ox, oy);
   m.ok = !m.peaks.empty();
@@ -220,31 +228,28 @@ void CorrelationTemplateCache::Bind(std::shared_ptr<const Mesh> model) {
   model_ = std::move(model);
 }
 
-bool CorrelationTemplateCache::Render(const PinholeCamera& camera, const Rigid3d& cam_from_obj,
-                                      cv::Mat* color, cv::Mat* coverage) {
-  UNSEEN_CHECK(model_ != nullptr, "CorrelationTemplateCache::Render before Bind");
+CorrelationTemplateCache::Template& CorrelationTemplateCache::Find(const PinholeCamera& camera,
+                                                                   const Rigid3d& cam_from_obj) {
+  UNSEEN_CHECK(model_ != nullptr, "CorrelationTemplateCache::Find before Bind");
   auto same_camera = [&](const PinholeCamera& c) {
     return c.width == camera.width && c.height == camera.height && c.fx == camera.fx &&
            c.fy == camera.fy && c.cx == camera.cx && c.cy == camera.cy;
   };
-  for (const Entry& e : entries_) {
+  for (Template& e : entries_) {
     if (same_camera(e.camera) && e.cam_from_obj.translation() == cam_from_obj.translation() &&
         e.cam_from_obj.rotation().coeffs() == cam_from_obj.rotation().coeffs()) {
       ++hits_;
-      *color = e.color;
-      *coverage = e.coverage;
-      return !e.color.empty();
+      return e;
     }
   }
   ++misses_;
-  Entry e{camera, cam_from_obj, {}, {}};
+  if (static_cast<int>(entries_.size()) >= kMaxEntries) entries_.pop_front();
+  Template& e = entries_.emplace_back();
+  e.camera = camera;
+  e.cam_from_obj = cam_from_obj;
   // Left empty when the model covers no pixel: remembered as such.
   SupersampledRender(*model_, camera, cam_from_obj, &e.color, &e.coverage);
-  if (static_cast<int>(entries_.size()) >= kMaxEntries) entries_.erase(entries_.begin());
-  entries_.push_back(e);
-  *color = e.color;
-  *coverage = e.coverage;
-  return !e.color.empty();
+  return e;
 }
 
 int CorrelationLevel(double diameter_px, const ReacquisitionOptions& options) {

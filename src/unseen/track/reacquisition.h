@@ -16,12 +16,15 @@
 // Options: ReacquisitionOptions (tracker_options.h).
 #pragma once
 
+#include <deque>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 #include "unseen/camera/camera.h"
 #include "unseen/geometry/rigid3.h"
+#include "unseen/image/template_matching.h"
 #include "unseen/mesh/mesh.h"
 #include "unseen/track/preprocess.h"
 #include "unseen/track/tracker.h"
@@ -41,31 +44,41 @@ struct CorrelationSeed {
   int reference_index = 0;    // which of the reference poses was matched
 };
 
-// Renders of the model kept between correlations: while the object is lost, the last good
-// pose and its turns are correlated anew in every frame, seen from the same cameras, so
-// their templates' renders repeat. Holds up to kMaxEntries renders of one model.
+// Templates of the model kept between correlations: while the object is lost, the last
+// good pose and its turns are correlated anew in every frame, seen from the same cameras, so
+// their renders repeat, and so do their transforms while the background colour they are
+// composited over stays about the same. Holds up to kMaxEntries templates of one model.
 class CorrelationTemplateCache {
  public:
   static constexpr int kMaxEntries = 32;
-  // The model the renders are of; a different one empties the cache.
+  // A template's transforms are reused while the search window's mean colour, which the
+  // template is composited over, stays within this of the one they were made with
+  // (largest channel difference, intensity in [0, 1]; 0.02: about 5 of 255 grey levels).
+  static constexpr double kFillTolerance = 0.02;
+
+  struct Template {
+    PinholeCamera camera;
+    Rigid3d cam_from_obj;
+    // Colour (CV_32FC3) and coverage (CV_32FC1) of the model at cam_from_obj in camera,
+    // area-averaged from a 2x2 supersampled render; empty: the model covers no pixel.
+    cv::Mat color, coverage;
+    // Once matched: the background colour it was composited over and its transforms.
+    cv::Scalar fill;
+    std::optional<MaskedTemplateMatcher::Prepared> prepared;
+  };
+
+  // The model the templates are of; a different one empties the cache.
   void Bind(std::shared_ptr<const Mesh> model);
   const Mesh& model() const { return *model_; }
-  // The colour (CV_32FC3) and coverage (CV_32FC1) of the model at `cam_from_obj` in
-  // `camera`, area-averaged from a 2x2 supersampled render: from the cache when the same
-  // pose and camera were rendered before. Returns false when the model covers no pixel.
-  bool Render(const PinholeCamera& camera, const Rigid3d& cam_from_obj, cv::Mat* color,
-              cv::Mat* coverage);
+  // The template of the model at `cam_from_obj` in `camera`, rendered when the same pose
+  // and camera were not rendered before. Valid until the next call.
+  Template& Find(const PinholeCamera& camera, const Rigid3d& cam_from_obj);
   int hits() const { return hits_; }
   int misses() const { return misses_; }
 
  private:
-  struct Entry {
-    PinholeCamera camera;
-    Rigid3d cam_from_obj;
-    cv::Mat color, coverage;  // empty: the model covers no pixel
-  };
   std::shared_ptr<const Mesh> model_;
-  std::vector<Entry> entries_;  // oldest first
+  std::deque<Template> entries_;  // oldest first
   int hits_ = 0, misses_ = 0;
 };
 

@@ -112,7 +112,7 @@ TEST_F(Reacquire, CorrelationFindsAKnownShiftDespiteAGainChange) {
 }
 
 // While lost, the same reference poses are correlated frame after frame: their templates
-// are rendered once, and the seeds are those found without the cache.
+// are rendered and transformed once, and the seeds are those found without the cache.
 TEST_F(Reacquire, RepeatedCorrelationsReuseTheirTemplateRenders) {
   const Rigid3d truth = CubePose();
   const Rigid3d reference(truth.rotation(), truth.translation() + Eigen::Vector3d(0.12, 0.05, 0.0));
@@ -140,6 +140,20 @@ TEST_F(Reacquire, RepeatedCorrelationsReuseTheirTemplateRenders) {
   }
   EXPECT_EQ(templates.misses(), static_cast<int>(references.size()));
   EXPECT_EQ(templates.hits(), 2 * static_cast<int>(references.size()));
+  // A darker scene: the templates' background (the window's mean colour) moved beyond
+  // kFillTolerance, so their transforms are made anew; the seeds are again those found
+  // without the cache.
+  const cv::Mat darker = Image(truth) * 0.6;
+  const std::vector<CorrelationSeed> plain_darker = FindCorrelationSeeds(
+      {darker}, rig_, *model, centre_, radius_, references, options, preprocess);
+  const std::vector<CorrelationSeed> cached_darker =
+      FindCorrelationSeeds({darker}, rig_, templates.model(), centre_, radius_, references, options,
+                           preprocess, &templates);
+  ASSERT_EQ(cached_darker.size(), plain_darker.size());
+  for (size_t k = 0; k < plain_darker.size(); ++k) {
+    EXPECT_DOUBLE_EQ(cached_darker[k].score, plain_darker[k].score);
+  }
+  EXPECT_EQ(templates.misses(), static_cast<int>(references.size()));  // no new render
   // Another model (a new appearance) renders anew.
   templates.Bind(std::make_shared<const Mesh>(cube_));
   FindCorrelationSeeds({Image(truth)}, rig_, templates.model(), centre_, radius_, references,
