@@ -55,13 +55,40 @@ StereoDepth::StereoDepth(const Rig& rig, int reference, const DepthExtractionOpt
                "depth source stereo: cameras '{}' and '{}' share a centre "
                "(baseline {} m): no depth from their pair",
                rig_.cameras[reference_].name, rig_.cameras[other_].name, baseline);
+
+  const RigCamera& ref = rig_.cameras[reference_];
+  const RigCamera& other = rig_.cameras[other_];
+  const Rigid3d other_from_ref = other.cam_from_world() * ref.world_from_cam;
+  const cv::Mat k1 = ToCv(a.K()), k2 = ToCv(b.K());
+  const cv::Mat rotation = ToCv(other_from_ref.RotationMatrix());
+  const Eigen::Vector3d t = other_from_ref.translation();
+  const cv::Mat translation = (cv::Mat_<double>(3, 1) << t.x(), t.y(), t.z());
+  const cv::Size size(a.width, a.height);
+  cv::Mat r1, r2, p1, p2, q;
+  cv::stereoRectify(k1, cv::noArray(), k2, cv::noArray(), size, rotation, translation, r1, r2, p1,
+                    p2, q, cv::CALIB_ZERO_DISPARITY, 0.0, size);
+  const double tx = p2.at<double>(0, 3), ty = p2.at<double>(1, 3);
+  UNSEEN_CHECK(std::abs(tx) >= std::abs(ty),
+               "depth source stereo: cameras '{}' and '{}' are stacked vertically; the matcher "
+               "needs a horizontal baseline",
+               ref.name, other.name);
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) rect_from_ref_(i, j) = r1.at<double>(i, j);
+  }
+  focal_px_ = p1.at<double>(0, 0);
+  principal_x_ = p1.at<double>(0, 2);
+  principal_y_ = p1.at<double>(1, 2);
+  focal_baseline_ = std::abs(tx);
+  mirrored_ = tx > 0.0;
+  cv::initUndistortRectifyMap(k1, cv::noArray(), r1, p1, size, CV_32FC1, ref_map_x_, ref_map_y_);
+  cv::initUndistortRectifyMap(k2, cv::noArray(), r2, p2, size, CV_32FC1, other_map_x_,
+                              other_map_y_);
 }
 
 DepthMap StereoDepth::Extract(const Frame& frame, const PixelRect& roi, double near_m,
                               double far_m) const {
   const StereoOptions& o = options_.stereo;
   const RigCamera& ref = rig_.cameras[reference_];
-  const RigCamera& other = rig_.cameras[other_];
   const PinholeCamera& kref = ref.intrinsics;
   const cv::Mat ref_grey = GreyImage(frame, rig_, reference_, "stereo");
   const cv::Mat other_grey = GreyImage(frame, rig_, other_, "stereo");
@@ -73,40 +100,16 @@ DepthMap StereoDepth::Extract(const Frame& frame, const PixelRect& roi, double n
   const double near = near_m > 0.0 ? near_m : options_.min_depth_m;
   const double far = far_m > 0.0 ? far_m : options_.max_depth_m;
 
-  // Rectify the pair (reference first): R1, P1 are the reference's.
-  const Rigid3d other_from_ref = other.cam_from_world() * ref.world_from_cam;
-  const cv::Mat k1 = ToCv(kref.K()), k2 = ToCv(other.intrinsics.K());
-  const cv::Mat rotation = ToCv(other_from_ref.RotationMatrix());
-  const Eigen::Vector3d t = other_from_ref.translation();
-  const cv::Mat translation = (cv::Mat_<double>(3, 1) << t.x(), t.y(), t.z());
   const cv::Size size(kref.width, kref.height);
-  cv::Mat r1, r2, p1, p2, q;
-  cv::stereoRectify(k1, cv::noArray(), k2, cv::noArray(), size, rotation, translation, r1, r2, p1,
-                    p2, q, cv::CALIB_ZERO_DISPARITY, 0.0, size);
-  const double tx = p2.at<double>(0, 3), ty = p2.at<double>(1, 3);
-  UNSEEN_CHECK(std::abs(tx) >= std::abs(ty),
-               "depth source stereo: cameras '{}' and '{}' are stacked vertically; the matcher "
-               "needs a horizontal baseline",
-               ref.name, other.name);
-  const double f = p1.at<double>(0, 0);
-  const double fb = std::abs(tx);  // focal length x baseline, px m
-  // The other camera left of the reference (tx > 0): match the mirrored pair, in which the
-  // reference is the left image.
-  const bool mirrored = tx > 0.0;
-
+  const double fb = focal_baseline_;
+  const bool mirrored = mirrored_;
   // The region's corners in the rectified reference image.
-  const Eigen::Matrix3d rect = [&] {
-    Eigen::Matrix3d m;
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) m(i, j) = r1.at<double>(i, j);
-    }
-    return m;
-  }();
+  const Eigen::Matrix3d& rect = rect_from_ref_;
   const Eigen::Matrix3d kref_inv = kref.K().inverse();
-  const double pcx = p1.at<double>(0, 2), pcy = p1.at<double>(1, 2);
   auto rectified = [&](double u, double v, Eigen::Vector3d* ray) {
     *ray = rect * (kref_inv * Eigen::Vector3d(u, v, 1.0));
-    return Eigen::Vector2d(f * ray->x() / ray->z() + pcx, f * ray->y() / ray->z() + pcy);
+    return Eigen::Vector2d(focal_px_ * ray->x() / ray->z() + principal_x_,
+                           focal_px_ * ray->y() / ray->z() + principal_y_);
   };
   double x_min = 1e9, x_max = -1e9, y_min = 1e9, y_max = -1e9;
   for (double u : {double(r.x0), double(r.x1 - 1)}) {
@@ -148,12 +151,11 @@ DepthMap StereoDepth::Extract(const Frame& frame, const PixelRect& roi, double n
   const int col1 = std::clamp(static_cast<int>(std::ceil(x_max)) + reach_right + margin + 1,
                               col0 + 1, size.width);
 
-  cv::Mat map1x, map1y, map2x, map2y, ref_rect, other_rect;
-  cv::initUndistortRectifyMap(k1, cv::noArray(), r1, p1, size, CV_32FC1, map1x, map1y);
-  cv::initUndistortRectifyMap(k2, cv::noArray(), r2, p2, size, CV_32FC1, map2x, map2y);
+  cv::Mat ref_rect, other_rect;
   const cv::Rect window(col0, row0, col1 - col0, row1 - row0);
-  cv::remap(To8U(ref_grey), ref_rect, map1x(window), map1y(window), cv::INTER_LINEAR);
-  cv::remap(To8U(other_grey), other_rect, map2x(window), map2y(window), cv::INTER_LINEAR);
+  cv::remap(To8U(ref_grey), ref_rect, ref_map_x_(window), ref_map_y_(window), cv::INTER_LINEAR);
+  cv::remap(To8U(other_grey), other_rect, other_map_x_(window), other_map_y_(window),
+            cv::INTER_LINEAR);
   if (mirrored) {
     cv::flip(ref_rect, ref_rect, 1);
     cv::flip(other_rect, other_rect, 1);

@@ -14,8 +14,9 @@ namespace unseen {
 
 class StereoDepth : public DepthSource {
  public:
-  // Throws unseen::Error for a rig without a second camera, an unknown
-  // StereoOptions::other_camera, or cameras whose rectification fails.
+  // Rectifies the pair once (it depends on the rig only). Throws unseen::Error for a rig
+  // without a second camera, an unknown StereoOptions::other_camera, cameras of different
+  // sizes or sharing a centre, or a pair stacked vertically.
   StereoDepth(const Rig& rig, int reference, const DepthExtractionOptions& options);
   DepthMap Extract(const Frame& frame, const PixelRect& roi, double near_m = 0.0,
                    double far_m = 0.0) const override;
@@ -27,6 +28,14 @@ class StereoDepth : public DepthSource {
   int reference_;
   int other_ = -1;
   DepthExtractionOptions options_;
+  // The pair's rectification (reference first, cv::stereoRectify) and its maps.
+  Eigen::Matrix3d rect_from_ref_ = Eigen::Matrix3d::Identity();    // R1
+  double focal_px_ = 0.0, principal_x_ = 0.0, principal_y_ = 0.0;  // P1
+  double focal_baseline_ = 0.0;                                    // focal length x baseline, px m
+  // The other camera left of the reference: the pair is matched mirrored, so that the
+  // reference is the matcher's left image.
+  bool mirrored_ = false;
+  cv::Mat ref_map_x_, ref_map_y_, other_map_x_, other_map_y_;  // CV_32FC1, full image
 };
 
 }  // namespace unseen
