@@ -45,10 +45,17 @@ ModellerOptions ModellerOptionsFor(const UnknownObjectArgs& args, const Sequence
       ThrowError("{}: --depth: {}", command, e.what());
     }
   }
-  UNSEEN_CHECK(options.depth.source != DepthSourceKind::kSensor || sequence.has_depth(),
-               "{}: --depth sensor but sequence '{}' has no depth images (use planesweep or "
-               "stereo with two cameras or more)",
-               command, sequence.path());
+  if (options.depth.source == DepthSourceKind::kSensor && !sequence.has_depth()) {
+    UNSEEN_CHECK(sequence.rig().size() >= 2,
+                 "{}: sequence '{}' has one camera and no depth images: an object without a "
+                 "model cannot be modelled from it (give its model with --model, or record "
+                 "depth images or a second camera)",
+                 command, sequence.path());
+    ThrowError(
+        "{}: depth source sensor{} but sequence '{}' has no depth images (use "
+        "planesweep or stereo with two cameras or more)",
+        command, args.depth.empty() ? " (from --model-config)" : " (--depth)", sequence.path());
+  }
   return options;
 }
 

@@ -99,7 +99,9 @@ TEST_F(RunCli, AVideoFileGoesThroughTheCamerasPath) {
       << no_calibration.err;
   const testing::CliResult no_depth = ::unseen::RunCli(fmt::format("run '{}'", dir_));
   EXPECT_NE(no_depth.exit_code, 0);
-  EXPECT_NE(no_depth.err.find("has no depth images"), std::string::npos) << no_depth.err;
+  EXPECT_NE(no_depth.err.find("has one camera and no depth images"), std::string::npos)
+      << no_depth.err;
+  EXPECT_NE(no_depth.err.find("--model"), std::string::npos) << no_depth.err;
   fs::remove(video);
   fs::remove(calibration);
   fs::remove(poses);
