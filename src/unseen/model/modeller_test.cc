@@ -148,6 +148,30 @@ TEST_F(ModellerScene, SegmentationDropsTheFloorTheObjectStandsOn) {
             0.8);
 }
 
+TEST_F(ModellerScene, SegmentationKeepsALargeFlatSideOfTheObject) {
+  const RigScene& s = *scene_;
+  const RigCamera& cam = s.rig.cameras[0];
+  // A van-like box, 240 x 110 x 110 mm, its long side to the camera at 0.6 m (turned 20 deg
+  // so that its front shows too): the side's plane reaches past the support test's rim as
+  // a floor would, but the rest of the box lies behind it, not before it.
+  const Mesh van = MakeTexturedBox(Eigen::Vector3d(0.24, 0.11, 0.11));
+  const Rigid3d cam_from_obj(Eigen::Quaterniond(Eigen::AngleAxisd(0.35, Eigen::Vector3d::UnitY())),
+                             Eigen::Vector3d(0.0, 0.0, 0.6));
+  RenderBuffers buffers;
+  Render(van, cam.intrinsics, cam_from_obj, cam.intrinsics.ImageRect(), RenderOptions(), &buffers);
+  const cv::Rect box = cv::boundingRect(buffers.mask);
+  const PixelRect region = PixelRect{box.x, box.y, box.x + box.width, box.y + box.height}.Grow(20);
+  DepthMap map;
+  map.depth = buffers.depth.clone();
+  map.dense = true;
+  SegmentationReport report;
+  const cv::Mat mask = SegmentObject(map, cam.intrinsics, region, cam_from_obj.translation(),
+                                     cv::Mat(), SegmentationOptions(), &report);
+  EXPECT_FALSE(report.plane_found);
+  EXPECT_EQ(report.on_plane, 0);
+  EXPECT_GT(Iou(mask, buffers.mask), 0.95);
+}
+
 TEST_F(ModellerScene, SegmentationSeparatesTheObjectFromTheWallBehindIt) {
   const RigScene& s = *scene_;
   DepthMap map;

@@ -85,8 +85,10 @@ std::optional<Plane> DominantPlane(const std::vector<Surfel>& points,
 // `pixels`, all inside the image rectangle `rect`), the first with inliers farther than
 // `rim` from `origin` in a connected stretch of the image — a table runs on beyond the
 // object, a face of an object smaller than `rim` does not (its plane meets far surfaces in
-// scattered lines at most). Up to four planes are tried (a box shows three faces), each
-// one's inliers set aside.
+// scattered lines at most) — and with the points off it mostly on the camera's side: an
+// object stands on its support or before it, while the rest of an object lies behind its
+// own faces (a large flat side facing the camera, as a van's, reaches past the rim too).
+// Up to four planes are tried (a box shows three faces), each one's inliers set aside.
 std::optional<Plane> SupportPlane(const std::vector<Surfel>& points,
                                   const std::vector<cv::Point>& pixels, const cv::Rect& rect,
                                   const Eigen::Vector3d& origin, double rim,
@@ -106,11 +108,24 @@ std::optional<Plane> SupportPlane(const std::vector<Surfel>& points,
     }
     cv::Mat labels;
     cv::connectedComponents(inliers, labels, 8, CV_32S);
-    // A stretch that reaches beyond the rim.
-    for (size_t i = 0; i < points.size(); ++i) {
+    // A stretch that reaches beyond the rim ...
+    bool reaches = false;
+    for (size_t i = 0; i < points.size() && !reaches; ++i) {
       if (excluded[i] || labels.at<int>(pixels[i] - rect.tl()) <= 0) continue;
-      if ((points[i].p - origin).norm() > rim) return plane;
+      reaches = (points[i].p - origin).norm() > rim;
     }
+    // ... with what is off the plane before it rather than behind it (the camera, at the
+    // frame's origin, is on the side of the sign of the offset).
+    int before = 0, behind = 0;
+    if (reaches) {
+      for (size_t i = 0; i < points.size(); ++i) {
+        if (excluded[i]) continue;
+        const double distance = plane->normal.dot(points[i].p) + plane->offset;
+        if (std::abs(distance) < on_plane.tolerance_m) continue;
+        ++((distance > 0.0) == (plane->offset > 0.0) ? before : behind);
+      }
+    }
+    if (reaches && before >= behind) return plane;
     for (size_t i = 0; i < points.size(); ++i) {
       if (on_plane.Holds(*plane, points[i])) excluded[i] = true;
     }
