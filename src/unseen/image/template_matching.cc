@@ -57,11 +57,11 @@ MaskedTemplateMatcher::Prepared MaskedTemplateMatcher::Prepare(const cv::Mat& te
                                                                const cv::Mat& mask) const {
   UNSEEN_CHECK(templ.size() == template_size_ && templ.channels() == 1 &&
                    (templ.depth() == CV_32F || templ.depth() == CV_64F),
-               "MaskedTemplateMatcher::Match: the template must be CV_32FC1 or CV_64FC1 of "
+               "MaskedTemplateMatcher: the template must be CV_32FC1 or CV_64FC1 of "
                "{}x{} (type {}, {}x{})",
                template_size_.width, template_size_.height, templ.type(), templ.cols, templ.rows);
   UNSEEN_CHECK(mask.size() == template_size_ && mask.type() == CV_8UC1,
-               "MaskedTemplateMatcher::Match: the mask must be CV_8UC1 of {}x{} (type {}, {}x{})",
+               "MaskedTemplateMatcher: the mask must be CV_8UC1 of {}x{} (type {}, {}x{})",
                template_size_.width, template_size_.height, mask.type(), mask.cols, mask.rows);
   Prepared prepared;
   prepared.dft_size = dft_size_;
