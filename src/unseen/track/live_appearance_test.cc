@@ -6,6 +6,7 @@
 #include "unseen/track/live_appearance.h"
 
 #include <cmath>
+#include <memory>
 
 #include <gtest/gtest.h>
 
@@ -109,6 +110,60 @@ TEST_F(LiveAppearance, AModelWithoutColoursTakesThemFromTheTrackedFrames) {
   r = plain.Track({Image(CubePose(kDeg))});
   EXPECT_FALSE(plain.photometric_in_use());
   EXPECT_EQ(r.summary.counts.used, 0);
+}
+
+TEST_F(LiveAppearance, AModelWhoseSilhouetteCannotConfirmTheGivenPoseTakesTheFramesColours) {
+  // The flat model's object is the lettered cube, before a wall papered with the cube's own
+  // print: the colours inside and around the silhouette are alike, and the silhouette alone
+  // cannot confirm the given pose.
+  const PinholeCamera& cam = rig_.cameras[0].intrinsics;
+  constexpr double kTile = 0.5;  // the print tiled at half its size
+  cv::Mat print;
+  cv::resize(textured_.materials[0].texture, print, cv::Size(), kTile, kTile, cv::INTER_AREA);
+  background_.create(cam.height, cam.width, CV_32FC3);
+  for (int y = 0; y < cam.height; y += print.rows) {
+    for (int x = 0; x < cam.width; x += print.cols) {
+      const cv::Rect tile(x, y, std::min(print.cols, cam.width - x), std::min(print.rows, cam.height - y));
+      print(cv::Rect(0, 0, tile.width, tile.height)).copyTo(background_(tile));
+    }
+  }
+  auto run = [&](bool when_silhouette_fails, TrackResult* first) {
+    TrackerOptions options;
+    options.live_appearance.when_silhouette_fails = when_silhouette_fails;
+    auto tracker = std::make_unique<Tracker>(rig_, testing::FlatCube(), options);
+    tracker->Initialize(CubePose());
+    *first = tracker->Track({Image(CubePose())});
+    return tracker;
+  };
+  TrackResult r;
+  std::unique_ptr<Tracker> by_silhouette = run(false, &r);
+  EXPECT_FALSE(by_silhouette->photometric_in_use());
+  const double silhouette_confidence = r.confidence;
+  ASSERT_LT(silhouette_confidence, 0.8) << "the scene must defeat the silhouette: "
+                                        << r.BriefReport();
+  std::unique_ptr<Tracker> tracker = run(true, &r);
+  EXPECT_TRUE(tracker->photometric_in_use()) << r.BriefReport();
+  EXPECT_EQ(tracker->model().projectors.size(), 1u);
+  EXPECT_GT(r.confidence, silhouette_confidence) << r.BriefReport();
+  EXPECT_LT(Difference(r.world_from_obj, CubePose()).translation, 0.002) << r.BriefReport();
+  // It follows the cube turning a degree a frame, which the silhouette alone could not
+  // vouch for at the first frame.
+  for (int k = 1; k <= 6; ++k) {
+    const Rigid3d truth = CubePose(k * kDeg);
+    r = tracker->Track({Image(truth)});
+    EXPECT_EQ(r.status, TrackStatus::kTracking) << k << ": " << r.BriefReport();
+    const PoseDifference e = Difference(r.world_from_obj, truth);
+    EXPECT_LT(e.translation, 0.006) << k << ": " << r.BriefReport();
+    EXPECT_LT(e.rotation_rad, 1.0 * kDeg) << k << ": " << r.BriefReport();
+  }
+  // A model whose silhouette confirms the given pose keeps to it (the smooth background).
+  background_ = testing::Background(cam, 7);
+  tracker = run(true, &r);
+  EXPECT_FALSE(tracker->photometric_in_use()) << r.BriefReport();
+  // Bad values and the YAML field.
+  TrackerOptions parsed = ParseTrackerOptions("live_appearance: {when_silhouette_fails: false}");
+  EXPECT_FALSE(parsed.live_appearance.when_silhouette_fails);
+  EXPECT_THROW(ParseTrackerOptions("live_appearance: {when_silhouette_fails: 3}"), Error);
 }
 
 TEST(LiveAppearanceOptions, CheckRejectsBadValues) {

@@ -190,7 +190,9 @@ class Tracker {
   TrackResult AlignPredicted(const Frame& frame, const Rigid3d& predicted);
   // The first frame after Initialize(): AlignPredicted from the given pose, with the checks
   // that the model's appearance fits the image (PhotometricOptions::min_start_fit,
-  // start_drag_px); a model that fails them is tracked without the photometric modality.
+  // start_drag_px); a model that fails them is tracked without the photometric modality. A
+  // model without colours whose silhouette does not confirm the given pose takes the first
+  // frame's colours seen from it (LiveAppearanceOptions::when_silhouette_fails).
   TrackResult AlignFirstFrame(const Frame& frame, const Rigid3d& given);
   // The confidence of an alignment: what the modalities vouch for, times the plausibility
   // of the object's on-screen area (FailureOptions::min_area_ratio).
@@ -239,9 +241,15 @@ class Tracker {
   // The photometric modality's use for the given model, from PhotometricOptions and
   // LiveAppearanceOptions; the rendered model becomes the given one.
   void StartWithGivenModel();
-  // After a frame tracked at `world_from_obj`: the model takes its colours from it when it
-  // lives on the tracked frames' (live_appearance_) and the frame is confident enough.
+  // After a tracked frame: the model takes its colours from it when it lives on the
+  // tracked frames' (live_appearance_) and the frame is confident enough.
   void UpdateLiveAppearance(const Frame& frame, const TrackResult& r);
+  // The model with `frame`'s colours projected onto it from `world_from_obj` becomes the
+  // rendered one (photometric modality on); false when no camera sees it.
+  bool TakeLiveAppearance(const Frame& frame, const Rigid3d& world_from_obj);
+  // The model has no colours of its own, and the silhouette could judge colours taken from
+  // the frames (LiveAppearanceOptions).
+  bool MayTakeLiveAppearance() const;
   // After a tracked frame: whether the model's own colours have fitted so poorly for so
   // long that it should take them from the frames (LiveAppearanceOptions::poor_fit_share).
   bool ColoursNeverFitted(const TrackResult& r);

@@ -47,19 +47,29 @@ bool Tracker::ColoursNeverFitted(const TrackResult& r) {
   return poor_fit_frames_ >= lo.poor_fit_frames && best_share_ < lo.poor_fit_best_share;
 }
 
+bool Tracker::MayTakeLiveAppearance() const {
+  return options_.photometric.enabled && options_.region.enabled &&
+         !given_model_->HasAppearance();
+}
+
 void Tracker::UpdateLiveAppearance(const Frame& frame, const TrackResult& r) {
   const LiveAppearanceOptions& lo = options_.live_appearance;
   if (!live_appearance_ || r.status != TrackStatus::kTracking || r.confidence < lo.min_confidence) {
     return;
   }
   if (model_ != given_model_ && ++frames_since_capture_ < lo.refresh_frames) return;
+  TakeLiveAppearance(frame, r.world_from_obj);
+}
+
+bool Tracker::TakeLiveAppearance(const Frame& frame, const Rigid3d& world_from_obj) {
+  const LiveAppearanceOptions& lo = options_.live_appearance;
   Mesh live = *given_model_;
   live.projectors.clear();
   const float tolerance_m = static_cast<float>(lo.occlusion_tolerance * sphere_radius_);
   for (int c = 0; c < rig_.size(); ++c) {
     if (frame.images[c].empty()) continue;
     const PinholeCamera& camera = rig_.cameras[c].intrinsics;
-    const Rigid3d cam_from_obj = cam_from_world_[c] * r.world_from_obj;
+    const Rigid3d cam_from_obj = cam_from_world_[c] * world_from_obj;
     const std::optional<PixelRect> rect = ObjectRect(camera, cam_from_obj);
     if (!rect) continue;
     std::optional<Projector> p = CaptureProjector(*given_model_, camera, cam_from_obj,
@@ -67,7 +77,7 @@ void Tracker::UpdateLiveAppearance(const Frame& frame, const TrackResult& r) {
                                                   tolerance_m);
     if (p) live.projectors.push_back(std::move(*p));
   }
-  if (live.projectors.empty()) return;
+  if (live.projectors.empty()) return false;
   if (model_ == given_model_) {
     UNSEEN_LOG_DEBUG("tracker: the model takes its colours from the tracked frames");
     residual_reference_px_ = 0.0;  // the fit to the given colours says nothing of these
@@ -76,6 +86,7 @@ void Tracker::UpdateLiveAppearance(const Frame& frame, const TrackResult& r) {
   use_photometric_ = true;
   photometric_demoted_ = false;  // colours from the frames have a weight of their own
   frames_since_capture_ = 0;
+  return true;
 }
 
 }  // namespace unseen

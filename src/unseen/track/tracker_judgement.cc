@@ -100,7 +100,36 @@ bool Tracker::LightChanged(const SolveSummary& s, bool has_depth) const {
 }
 
 TrackResult Tracker::AlignFirstFrame(const Frame& frame, const Rigid3d& given) {
+  const std::vector<ColorHistograms> given_histograms = region_.histograms();
+  const double given_recent_correction_px = recent_correction_px_;
   TrackResult r = AlignPredicted(frame, given);
+  const LiveAppearanceOptions& lo = options_.live_appearance;
+  if (!live_appearance_ && lo.when_silhouette_fails && MayTakeLiveAppearance() &&
+      r.confidence < lo.min_confidence) {
+    // The silhouette alone does not confirm the given pose (an object coloured like its
+    // surroundings): the object as the first frame shows it there may.
+    const std::vector<ColorHistograms> silhouette_histograms = region_.histograms();
+    const double silhouette_recent_correction_px = recent_correction_px_;
+    region_.set_histograms(given_histograms);
+    recent_correction_px_ = given_recent_correction_px;
+    if (TakeLiveAppearance(frame, given)) {
+      live_appearance_ = true;
+      TrackResult with_colours = AlignPredicted(frame, given);
+      with_colours.summary.times += r.summary.times;
+      if (with_colours.confidence > r.confidence) {
+        UNSEEN_LOG_INFO("tracker: the silhouette alone does not confirm the given pose "
+                        "(confidence {:.2f}); the model takes its colours from the frames "
+                        "(confidence {:.2f})",
+                        r.confidence, with_colours.confidence);
+        return with_colours;
+      }
+      StartWithGivenModel();  // back to the model's own (no) colours
+      r.summary.times = with_colours.summary.times;
+    }
+    region_.set_histograms(silhouette_histograms);
+    recent_correction_px_ = silhouette_recent_correction_px;
+    return r;
+  }
   const RegionModalityOptions& ro = options_.region;
   const PhotometricOptions& po = options_.photometric;
   if (!use_photometric_ || !ro.enabled) return r;

@@ -328,6 +328,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"min_start_edge_share", YamlField(&rg.min_start_edge_share)}}},
       {"live_appearance",
        {{"enabled", YamlField(&la.enabled)},
+        {"when_silhouette_fails", YamlField(&la.when_silhouette_fails)},
         {"always", YamlField(&la.always)},
         {"min_confidence", YamlField(&la.min_confidence)},
         {"refresh_frames", YamlField(&la.refresh_frames)},
