@@ -20,6 +20,7 @@
 #include "unseen/util/error.h"
 #include "unseen/util/logging.h"
 #include "unseen/util/timer.h"
+#include "unseen/util/memory.h"
 
 namespace {
 
@@ -130,6 +131,7 @@ SequenceFigures Run(const fs::path& path, const Args& args, bool verbose) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  unseen::KeepFreedMemoryForReuse();
   Args args;
   CLI::App app{"unseen initial-pose benchmark: the known model's pose found from its box"};
   app.add_option("--data", args.data_dir, "Development sequences folder");

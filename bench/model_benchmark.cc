@@ -44,6 +44,7 @@
 #include "unseen/track/tracker.h"
 #include "unseen/util/logging.h"
 #include "unseen/util/timer.h"
+#include "unseen/util/memory.h"
 
 namespace unseen {
 namespace {
@@ -372,4 +373,7 @@ int Main(int argc, char** argv) {
 }  // namespace
 }  // namespace unseen
 
-int main(int argc, char** argv) { return unseen::Main(argc, argv); }
+int main(int argc, char** argv) {
+  unseen::KeepFreedMemoryForReuse();
+  return unseen::Main(argc, argv);
+}

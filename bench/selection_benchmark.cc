@@ -28,6 +28,7 @@
 #include "unseen/util/error.h"
 #include "unseen/util/logging.h"
 #include "unseen/util/timer.h"
+#include "unseen/util/memory.h"
 
 namespace {
 
@@ -141,6 +142,7 @@ SequenceFigures Run(const fs::path& path, const Args& args) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  unseen::KeepFreedMemoryForReuse();
   Args args;
   CLI::App app{"unseen selection benchmark: the object of interest found by the selection"};
   app.add_option("--data", args.data_dir, "Sequences folder (or one sequence)");

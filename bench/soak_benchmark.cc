@@ -256,6 +256,7 @@ int Main(int argc, char** argv) {
 }  // namespace unseen
 
 int main(int argc, char** argv) {
+  unseen::KeepFreedMemoryForReuse();
   try {
     return unseen::Main(argc, argv);
   } catch (const std::exception& e) {

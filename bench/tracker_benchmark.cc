@@ -39,6 +39,7 @@
 #include "unseen/util/error.h"
 #include "unseen/util/files.h"
 #include "unseen/util/logging.h"
+#include "unseen/util/memory.h"
 
 namespace unseen {
 namespace {
@@ -425,6 +426,7 @@ int Main(int argc, char** argv) {
 }  // namespace unseen
 
 int main(int argc, char** argv) {
+  unseen::KeepFreedMemoryForReuse();
   try {
     return unseen::Main(argc, argv);
   } catch (const std::exception& e) {

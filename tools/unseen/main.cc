@@ -10,8 +10,10 @@
 #include "tools/unseen/commands.h"
 #include "unseen/util/error.h"
 #include "unseen/util/logging.h"
+#include "unseen/util/memory.h"
 
 int main(int argc, char** argv) {
+  unseen::KeepFreedMemoryForReuse();
   CLI::App app{"unseen: track the 6-DoF pose of an object, known or never seen before, "
                "from one or more calibrated cameras."};
   app.require_subcommand(1);

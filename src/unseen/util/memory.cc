@@ -2,6 +2,9 @@
 #include "unseen/util/memory.h"
 
 #include <unistd.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include <cstdio>
 
@@ -17,6 +20,17 @@ int64_t ResidentMemoryBytes() {
   if (read != 2) return 0;
   const long page = sysconf(_SC_PAGESIZE);
   return page > 0 ? static_cast<int64_t>(resident_pages) * page : 0;
+}
+
+bool KeepFreedMemoryForReuse() {
+#if defined(__GLIBC__)
+  constexpr int kMmapThresholdBytes = 32 << 20;  // glibc's maximum on 64-bit
+  constexpr int kTrimThresholdBytes = 256 << 20;
+  return mallopt(M_MMAP_THRESHOLD, kMmapThresholdBytes) == 1 &&
+         mallopt(M_TRIM_THRESHOLD, kTrimThresholdBytes) == 1;
+#else
+  return false;
+#endif
 }
 
 }  // namespace unseen
