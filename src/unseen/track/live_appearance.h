@@ -38,8 +38,8 @@ struct LiveAppearanceOptions {
   // (the first frame aligned by it below min_confidence: an object coloured like its
   // surroundings, a white cube on white paper) takes its colours from the frames, whatever
   // `enabled` says, starting with the first frame's seen from the given pose, when that
-  // aligns the first frame more confidently. Real grey footage of an 84 mm printed cube with an untextured model: 4 ->
-  // 218 of 218 frames tracked.
+  // aligns the first frame more confidently. Real footage with untextured models: a printed
+  // cube on white paper 4 -> 218 of 218 frames tracked, a castle with depth 1 -> 30 of 30.
   bool when_silhouette_fails = true;
   // A new texture after at most this many frames; between them the last one stays (a
   // texture taken every frame follows the light best and drifts most).
