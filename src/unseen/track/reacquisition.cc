@@ -478,9 +478,27 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
   // The coasted pose first: an object that comes out from behind an occluder is most
   // likely where it went on moving.
   std::vector<Rigid3d> candidates{coasted};
-  for (const Rigid3d& p : ReacquisitionCandidates(
-           last_good, seeds, sphere_centre_, options.failure.search_offset * sphere_radius_, o)) {
-    candidates.push_back(p);
+  const std::vector<Rigid3d> around = ReacquisitionCandidates(
+      last_good, seeds, sphere_centre_, options.failure.search_offset * sphere_radius_, o);
+  // A new loss (another last good pose) starts with a complete search.
+  if (!quiet_last_good_ || !(quiet_last_good_->translation() == last_good.translation() &&
+                             quiet_last_good_->rotation().coeffs() ==
+                                 last_good.rotation().coeffs())) {
+    quiet_ = false;
+    quiet_slice_ = 0;
+  }
+  quiet_last_good_ = last_good;
+  const int num_seeds = std::min(static_cast<int>(seeds.size()), static_cast<int>(around.size()));
+  const int num_others = static_cast<int>(around.size()) - num_seeds;
+  if (quiet_ && o.quiet_candidates >= 0 && o.quiet_candidates < num_others) {
+    // The object was not seen in the last search: the seeds, and a slice of the others.
+    candidates.insert(candidates.end(), around.begin(), around.begin() + num_seeds);
+    for (int k = 0; k < o.quiet_candidates; ++k) {
+      candidates.push_back(around[num_seeds + (quiet_slice_ * o.quiet_candidates + k) % num_others]);
+    }
+    ++quiet_slice_;
+  } else {
+    candidates.insert(candidates.end(), around.begin(), around.end());
   }
 
   // Score every candidate at the coarse levels (the full pyramid when it has no more).
@@ -514,6 +532,10 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
     return a.score != b.score ? a.score > b.score : a.order < b.order;
   };
   std::sort(scored.begin(), scored.end(), by_score);
+  // Nothing like the object at any candidate: the next search, if the object stays lost,
+  // is a quiet one.
+  quiet_ = finest == 0 ? best.confidence < o.min_score
+                       : scored.empty() || scored.front().score < o.min_score;
   // Aligns every scored candidate on from where it stopped (`num_levels` from `level`) and
   // sorts them again.
   auto continue_scored = [&](int level, int num_levels) {

@@ -150,7 +150,8 @@ class Reacquisition {
   // (successive halving down to level 1), aligns the best options.refine_candidates at
   // full resolution (stopping once one reaches failure.recover_confidence) and returns the
   // most confident of them (confidence 0 at `coasted` when none was refined;
-  // summary.search_candidates = poses tried, times summed).
+  // summary.search_candidates = poses tried, times summed). After a search that found
+  // nothing, the next ones of the same loss are quiet (options.quiet_candidates).
   TrackResult Search(const Frame& frame, const Rigid3d& last_good, const Rigid3d& coasted);
   // While tracking, for a doubtful frame: `first` is the full alignment from `predicted`.
   // Aligns from the correlation seed around `predicted` when it moves the object, and
@@ -176,6 +177,12 @@ class Reacquisition {
 
   Tracker& tracker_;
   CorrelationTemplateCache templates_;
+  // Quiet searches (ReacquisitionOptions::quiet_candidates): the last good pose of the
+  // loss being searched, whether its last search found nothing, and the next slice of the
+  // candidates around the last good pose.
+  std::optional<Rigid3d> quiet_last_good_;
+  bool quiet_ = false;
+  int quiet_slice_ = 0;
   Eigen::Vector3d sphere_centre_ = Eigen::Vector3d::Zero();
   double sphere_radius_ = 0.0;
 };

@@ -344,5 +344,47 @@ TEST_F(Reacquire, AnObjectThatLeftTheViewIsReacquiredWhenItComesBack) {
   EXPECT_LT(Difference(r.world_from_obj, back).translation, 0.003) << r.BriefReport();
 }
 
+TEST_F(Reacquire, WhileNothingIsFoundTheSearchesAreQuietUntilTheObjectIsBack) {
+  // Per lost frame, the candidates scored: complete searches, or quiet ones after a search
+  // that found nothing (ReacquisitionOptions::quiet_candidates).
+  auto searched = [&](const TrackerOptions& options, std::vector<int>* candidates) {
+    Tracker tracker(rig_, cube_, options);
+    const Rigid3d start = CubePose();
+    tracker.Initialize(start);
+    TrackResult r;
+    for (int k = 0; k < 3; ++k) r = tracker.Track({Image(start)});
+    EXPECT_EQ(r.status, TrackStatus::kTracking);
+    for (int k = 0; k < 8; ++k) {
+      const bool was_lost = r.status == TrackStatus::kLost;  // this frame searches
+      r = tracker.Track({background_});
+      if (was_lost) candidates->push_back(r.summary.search_candidates);
+    }
+    EXPECT_EQ(r.status, TrackStatus::kLost);
+    const Rigid3d back(start.rotation(), start.translation() + Eigen::Vector3d(0.12, 0.03, 0.0));
+    int frames = 0;
+    for (; frames < 4 && r.status == TrackStatus::kLost; ++frames) r = tracker.Track({Image(back)});
+    EXPECT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
+    EXPECT_LE(frames, 2);
+    return r.status == TrackStatus::kTracking;
+  };
+  const TrackerOptions quiet;
+  ASSERT_GE(quiet.reacquisition.quiet_candidates, 0);
+  TrackerOptions complete;
+  complete.reacquisition.quiet_candidates = -1;
+  std::vector<int> quiet_counts, complete_counts;
+  EXPECT_TRUE(searched(quiet, &quiet_counts));
+  EXPECT_TRUE(searched(complete, &complete_counts));
+  ASSERT_GE(complete_counts.size(), 4u);
+  ASSERT_EQ(quiet_counts.size(), complete_counts.size());
+  // The first search of the loss is complete; once it found nothing, the next ones try
+  // the coasted pose, the seeds and quiet_candidates of the others.
+  EXPECT_EQ(quiet_counts[0], complete_counts[0]);
+  const int most = 1 + quiet.reacquisition.max_seeds + quiet.reacquisition.quiet_candidates;
+  for (size_t k = 1; k < quiet_counts.size(); ++k) {
+    EXPECT_LE(quiet_counts[k], most) << "lost frame " << k;
+    EXPECT_LT(quiet_counts[k], complete_counts[k]) << "lost frame " << k;
+  }
+}
+
 }  // namespace
 }  // namespace unseen

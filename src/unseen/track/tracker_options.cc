@@ -121,6 +121,8 @@ void ReacquisitionOptions::Check() const {
                "reacquisition.refine_levels {} must be in [0, 8]", refine_levels);
   UNSEEN_CHECK(min_score >= 0.0 && min_score <= 1.0,
                "reacquisition.min_score {} must be in [0, 1]", min_score);
+  UNSEEN_CHECK(quiet_candidates >= -1 && quiet_candidates <= 100,
+               "reacquisition.quiet_candidates {} must be in [-1, 100]", quiet_candidates);
   UNSEEN_CHECK(doubtful_confidence >= 0.0 && doubtful_confidence <= 1.0,
                "reacquisition.doubtful_confidence {} must be in [0, 1]", doubtful_confidence);
   UNSEEN_CHECK(min_seed_shift_px >= 0.0 && std::isfinite(min_seed_shift_px),
@@ -287,6 +289,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"refine_candidates", YamlField(&re.refine_candidates)},
         {"refine_levels", YamlField(&re.refine_levels)},
         {"min_score", YamlField(&re.min_score)},
+        {"quiet_candidates", YamlField(&re.quiet_candidates)},
         {"seed_when_doubtful", YamlField(&re.seed_when_doubtful)},
         {"doubtful_confidence", YamlField(&re.doubtful_confidence)},
         {"min_seed_shift_px", YamlField(&re.min_seed_shift_px)}}},
