@@ -475,6 +475,70 @@ void ReleaseOutputs(RenderBuffers* out) {
 
 }  // namespace
 
+namespace {
+
+// The colour of rows [row_begin, row_end) (row_begin even) of `out` with one shading of
+// each 2x2 block of samples that one triangle covers whole, at the mean of its samples'
+// barycentric coordinates (RenderOptions::shade_quads); the other samples one by one.
+// Expects the resolved mask, metric depth, the triangle ids and the weights (b / z).
+void ResolveQuadColors(RenderBuffers& out, const cv::Mat& ids, int row_begin, int row_end,
+                       Shader* shader) {
+  const int width = out.mask.cols;
+  auto shade = [&](int y, int x) {
+    float* color = out.color.ptr<float>(y) + 3 * x;
+    if (!out.mask.ptr<uint8_t>(y)[x]) {
+      color[0] = color[1] = color[2] = 0.0f;
+      return;
+    }
+    const float z = out.depth.ptr<float>(y)[x];
+    const float* w = out.scratch_weights.ptr<float>(y) + 2 * x;
+    shader->Color(ids.ptr<int32_t>(y)[x], w[0] * z, w[1] * z, color);
+  };
+  int y = row_begin;
+  for (; y + 1 < row_end; y += 2) {
+    const uint8_t* m0 = out.mask.ptr<uint8_t>(y);
+    const uint8_t* m1 = out.mask.ptr<uint8_t>(y + 1);
+    const int32_t* id0 = ids.ptr<int32_t>(y);
+    const int32_t* id1 = ids.ptr<int32_t>(y + 1);
+    const float* z0 = out.depth.ptr<float>(y);
+    const float* z1 = out.depth.ptr<float>(y + 1);
+    const float* w0 = out.scratch_weights.ptr<float>(y);
+    const float* w1 = out.scratch_weights.ptr<float>(y + 1);
+    float* c0 = out.color.ptr<float>(y);
+    float* c1 = out.color.ptr<float>(y + 1);
+    int x = 0;
+    for (; x + 1 < width; x += 2) {
+      const int32_t id = id0[x];
+      if (m0[x] && m0[x + 1] && m1[x] && m1[x + 1] && id0[x + 1] == id && id1[x] == id &&
+          id1[x + 1] == id) {
+        const float b1 = 0.25f * (w0[2 * x] * z0[x] + w0[2 * x + 2] * z0[x + 1] +
+                                  w1[2 * x] * z1[x] + w1[2 * x + 2] * z1[x + 1]);
+        const float b2 = 0.25f * (w0[2 * x + 1] * z0[x] + w0[2 * x + 3] * z0[x + 1] +
+                                  w1[2 * x + 1] * z1[x] + w1[2 * x + 3] * z1[x + 1]);
+        float bgr[3];
+        shader->Color(id, b1, b2, bgr);
+        for (int k = 0; k < 3; ++k) {
+          c0[3 * x + k] = c0[3 * x + 3 + k] = c1[3 * x + k] = c1[3 * x + 3 + k] = bgr[k];
+        }
+        continue;
+      }
+      shade(y, x);
+      shade(y, x + 1);
+      shade(y + 1, x);
+      shade(y + 1, x + 1);
+    }
+    for (; x < width; ++x) {
+      shade(y, x);
+      shade(y + 1, x);
+    }
+  }
+  for (; y < row_end; ++y) {
+    for (int x = 0; x < width; ++x) shade(y, x);
+  }
+}
+
+}  // namespace
+
 void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_from_obj,
             const PixelRect& roi_in, const RenderOptions& options, RenderBuffers* out) {
   UNSEEN_CHECK(out != nullptr, "Render: output buffers are null");
@@ -648,17 +712,24 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
   const int bands = options.pool != nullptr && size.area() >= kParallelResolvePixels
                         ? std::min(options.pool->size(), size.height)
                         : 1;
+  // Colour once per 2x2 block one triangle covers whole (bands of whole blocks).
+  const bool quads = options.shade_quads && options.write_color && !uv_mode;
+  auto band_row = [&](int band) {
+    return quads ? 2 * ((size.height / 2) * band / bands) + (band == bands ? size.height % 2 : 0)
+                 : size.height * band / bands;
+  };
   auto resolve_band = [&](int band) {
     Shader shader(mesh, textures);
-    const int row_end = size.height * (band + 1) / bands;
-    for (int y = size.height * band / bands; y < row_end; ++y) {
+    const int row_begin = band_row(band), row_end = band_row(band + 1);
+    if (quads) ResolveQuadColors(*out, ids, row_begin, row_end, &shader);
+    for (int y = row_begin; y < row_end; ++y) {
       float* z = out->depth.ptr<float>(y);
       uint8_t* m = out->mask.ptr<uint8_t>(y);
       if (options.write_triangle_ids) {
         int32_t* id = ids.ptr<int32_t>(y);
         for (int x = 0; x < width; ++x) id[x] = m[x] ? id[x] : -1;
       }
-      if (options.write_color) {
+      if (options.write_color && !quads) {
         float* color = out->color.ptr<float>(y);
         const float* w = out->scratch_weights.ptr<float>(y);
         const int32_t* id = need_ids ? ids.ptr<int32_t>(y) : nullptr;

@@ -13,6 +13,8 @@
 namespace unseen {
 namespace {
 
+constexpr double kTurn = 10.0 * M_PI / 180.0;  // the render's view from the projector's
+
 void BM_RenderSphere(benchmark::State& state) {
   const int rings = static_cast<int>(state.range(0));
   const int segments = static_cast<int>(state.range(1));
@@ -54,6 +56,57 @@ BENCHMARK(BM_RenderSphere)
 BENCHMARK(BM_RenderSphere)
     ->ArgNames({"rings", "segments", "roi", "color"})
     ->ArgsProduct({{160}, {320}, {0, 1}, {0, 1}})
+    ->Unit(benchmark::kMicrosecond);
+
+// The same sphere textured by a projector (a live camera frame, as the tracker's live
+// appearance and the on-line model have it) seen from 10 degrees off the render's view,
+// with the projector's own depth (self-occlusion test); arguments: rings (segments = 2x),
+// quads (RenderOptions::shade_quads).
+void BM_RenderProjective(benchmark::State& state) {
+  const int rings = static_cast<int>(state.range(0));
+  PinholeCamera camera;
+  camera.width = 640;
+  camera.height = 480;
+  camera.fx = camera.fy = 600.0;
+  camera.cx = 319.5;
+  camera.cy = 239.5;
+  const double radius = 0.1;
+  Mesh sphere = MakeTexturedSphere(radius, rings, 2 * rings);
+  const Eigen::Vector3d centre(0.0, 0.0, 0.5);
+  const Rigid3d projector_from_obj(ExpSO3(Eigen::Vector3d(0.9, 0.2, 0.3)), centre);
+  RenderOptions options;
+  RenderBuffers seen;
+  Render(sphere, camera, projector_from_obj, camera.ImageRect(), options, &seen);
+  Projector projector;
+  projector.image = cv::Mat(camera.height, camera.width, CV_32FC3, cv::Scalar(0.2, 0.4, 0.6));
+  seen.color.copyTo(projector.image(cv::Rect(seen.roi.x0, seen.roi.y0, seen.roi.width(),
+                                             seen.roi.height())),
+                    seen.mask);
+  projector.camera = camera;
+  projector.cam_from_obj = projector_from_obj;
+  projector.depth = cv::Mat::zeros(camera.height, camera.width, CV_32FC1);
+  seen.depth.copyTo(projector.depth(cv::Rect(seen.roi.x0, seen.roi.y0, seen.roi.width(),
+                                             seen.roi.height())));
+  sphere.projectors.push_back(projector);
+  // Rendered 2x2 supersampled, as the tracker does.
+  const PinholeCamera fine = camera.Scaled(0.5);
+  const PixelRect roi = *fine.SphereRect(centre, radius);
+  options.shade_quads = state.range(1) != 0;
+  RenderBuffers out;
+  int frame = 0;
+  for (auto _ : state) {
+    const Rigid3d cam_from_obj(
+        ExpSO3(Eigen::Vector3d(0.9, 0.2 + 0.1 * kTurn * (frame++ % 2), 0.3 + kTurn)), centre);
+    Render(sphere, fine, cam_from_obj, roi, options, &out);
+    benchmark::DoNotOptimize(out.color.data);
+  }
+  state.counters["triangles"] = sphere.num_triangles();
+  state.counters["covered_px"] = cv::countNonZero(out.mask);
+}
+
+BENCHMARK(BM_RenderProjective)
+    ->ArgNames({"rings", "quads"})
+    ->ArgsProduct({{25, 80}, {0, 1}})
     ->Unit(benchmark::kMicrosecond);
 
 }  // namespace

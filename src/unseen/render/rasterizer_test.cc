@@ -14,6 +14,7 @@
 #include "unseen/render/mipmap.h"
 #include "unseen/util/error.h"
 #include "unseen/util/testing.h"
+#include "unseen/util/thread_pool.h"
 
 namespace unseen {
 namespace {
@@ -688,6 +689,64 @@ TEST(Rasterizer, ProjectiveTextureFromTheRenderingCameraReproducesTheImage) {
     }
   }
   EXPECT_GT(fallback, 500);
+}
+
+TEST(Rasterizer, QuadShadingColoursEachWholeBlockOnceAndTheRestPerSample) {
+  const PinholeCamera cam = TestCamera();
+  const Rigid3d cam_from_obj =
+      Pose(Eigen::Vector3d(0.3, -0.2, 0.05), Eigen::Vector3d(0.02, 0.01, 1.0));
+  // Two tilted triangles, colours affine in the 3-D position.
+  Mesh quad = MakeQuad({{-0.3f, -0.25f, 0.1f}, {-0.3f, 0.25f, 0.0f}, {0.3f, 0.25f, -0.1f},
+                        {0.3f, -0.25f, 0.0f}});
+  for (const Eigen::Vector3f& v : quad.vertices) {
+    quad.colors_bgr.push_back(Eigen::Vector3f(0.5f + v.x(), 0.5f + v.y(), 0.5f + 2.0f * v.z()));
+  }
+  RenderOptions options;
+  options.cull_back_faces = false;
+  options.write_triangle_ids = true;
+  RenderBuffers each, quads;
+  Render(quad, cam, cam_from_obj, cam.ImageRect(), options, &each);
+  options.shade_quads = true;
+  Render(quad, cam, cam_from_obj, cam.ImageRect(), options, &quads);
+  EXPECT_EQ(cv::countNonZero(each.mask != quads.mask), 0);
+  EXPECT_EQ(cv::countNonZero(each.depth != quads.depth), 0);
+  int whole = 0, partial = 0;
+  for (int y = 0; y + 1 < cam.height; y += 2) {
+    for (int x = 0; x + 1 < cam.width; x += 2) {
+      const cv::Rect block(x, y, 2, 2);
+      const cv::Mat ids = quads.triangle_id(block);
+      const int id = ids.at<int32_t>(0, 0);
+      if (id >= 0 && cv::countNonZero(ids == id) == 4) {
+        // One shading for the block, at its centre: about the mean of its four samples.
+        ++whole;
+        const cv::Vec3f first = quads.color.at<cv::Vec3f>(y, x);
+        cv::Vec3f mean(0.0f, 0.0f, 0.0f);
+        for (int k = 0; k < 4; ++k) {
+          ASSERT_EQ(quads.color.at<cv::Vec3f>(y + k / 2, x + k % 2), first) << x << " " << y;
+          mean += 0.25f * each.color.at<cv::Vec3f>(y + k / 2, x + k % 2);
+        }
+        ASSERT_LT(cv::norm(first - mean), 1e-3) << x << " " << y;
+      } else {
+        // An edge crosses the block: each sample on its own, as without the option.
+        if (cv::countNonZero(quads.mask(block)) > 0) ++partial;
+        for (int k = 0; k < 4; ++k) {
+          ASSERT_EQ(quads.color.at<cv::Vec3f>(y + k / 2, x + k % 2),
+                    each.color.at<cv::Vec3f>(y + k / 2, x + k % 2))
+              << x + k % 2 << " " << y + k / 2;
+        }
+      }
+    }
+  }
+  EXPECT_GT(whole, 500);
+  EXPECT_GT(partial, 20);
+
+  // In bands of rows on three threads, with an odd number of rows: the same image.
+  const PinholeCamera odd = TestCamera(160, 121);
+  Render(quad, odd, cam_from_obj, odd.ImageRect(), options, &each);
+  ThreadPool pool(3);
+  options.pool = &pool;
+  Render(quad, odd, cam_from_obj, odd.ImageRect(), options, &quads);
+  EXPECT_EQ(cv::norm(each.color, quads.color, cv::NORM_INF), 0.0);
 }
 
 TEST(Rasterizer, AProjectorsDepthHidesTheSurfaceBehindWhatItSaw) {

@@ -105,7 +105,9 @@ struct ProjectorView {
   float fx, fy, cx, cy;
   float max_x, max_y;  // width - 0.5, height - 0.5
   TextureView image;
-  const cv::Mat* depth = nullptr;  // the projector's surface z, or null
+  // The projector's surface z (CV_32FC1 of the image's size), or null.
+  const float* depth = nullptr;
+  size_t depth_step = 0;  // floats per row
   float depth_tolerance_m = 0.0f;
 };
 
@@ -128,7 +130,10 @@ class Shader {
       v.max_x = p.image.cols - 0.5f;
       v.max_y = p.image.rows - 0.5f;
       v.image = TextureView(p.image);
-      if (!p.depth.empty()) v.depth = &p.depth;
+      if (!p.depth.empty()) {
+        v.depth = p.depth.ptr<float>();
+        v.depth_step = p.depth.step1();
+      }
       v.depth_tolerance_m = p.depth_tolerance_m;
       projectors_.push_back(v);
     }
@@ -223,14 +228,20 @@ class Shader {
         const ProjectorView& v = projectors_[k];
         ProjectorTriangle pt;
         pt.projector = static_cast<int>(k);
-        pt.q0 = v.rotation * p0 + v.translation;
-        pt.dq1 = v.rotation * dp1;
-        pt.dq2 = v.rotation * dp2;
-        pt.normal = v.rotation * face_normal;
-        const Eigen::Vector3f centre = pt.q0 + (pt.dq1 + pt.dq2) / 3.0f;
-        const float facing = -pt.normal.dot(centre);
+        const Eigen::Vector3f q0 = v.rotation * p0 + v.translation;
+        const Eigen::Vector3f dq1 = v.rotation * dp1;
+        const Eigen::Vector3f dq2 = v.rotation * dp2;
+        // The triangle's plane faces the projector at every point of it or at none
+        // (normal . q is the same for all q of the plane): tested once, at the centre.
+        const Eigen::Vector3f centre = q0 + (dq1 + dq2) / 3.0f;
+        const float facing = -(v.rotation * face_normal).dot(centre);
         if (!(facing > 0.0f && centre.z() > 0.0f)) continue;
         pt.score = facing / centre.norm();
+        // Rows of K [q0 dq1 dq2]: the projector's homogeneous pixel of (b1, b2).
+        const Eigen::Vector3f kx(v.fx, 0.0f, v.cx), ky(0.0f, v.fy, v.cy);
+        pt.x = Eigen::Vector3f(kx.dot(q0), kx.dot(dq1), kx.dot(dq2));
+        pt.y = Eigen::Vector3f(ky.dot(q0), ky.dot(dq1), ky.dot(dq2));
+        pt.z = Eigen::Vector3f(q0.z(), dq1.z(), dq2.z());
         candidates_.push_back(pt);
       }
       count = static_cast<int>(candidates_.size()) - begin;
@@ -246,21 +257,20 @@ class Shader {
     for (int c = candidates_begin_; c < candidates_end_; ++c) {
       const ProjectorTriangle& pt = candidates_[c];
       const ProjectorView& v = projectors_[pt.projector];
-      const Eigen::Vector3f q = pt.q0 + b1 * pt.dq1 + b2 * pt.dq2;
-      if (!(q.z() > 0.0f)) continue;
-      const float inv_z = 1.0f / q.z();
-      const float x = v.fx * q.x() * inv_z + v.cx, y = v.fy * q.y() * inv_z + v.cy;
+      const float z = pt.z[0] + b1 * pt.z[1] + b2 * pt.z[2];
+      if (!(z > 0.0f)) continue;
+      const float inv_z = 1.0f / z;
+      const float x = (pt.x[0] + b1 * pt.x[1] + b2 * pt.x[2]) * inv_z;
+      const float y = (pt.y[0] + b1 * pt.y[1] + b2 * pt.y[2]) * inv_z;
       if (!(x >= -0.5f && y >= -0.5f && x < v.max_x && y < v.max_y)) continue;
       if (v.depth) {
         // Hidden from the projector: behind the surface it saw there, or it saw none.
         // (x, y >= -0.5: adding a half and truncating rounds to the nearest pixel.)
-        const int px = std::min(static_cast<int>(x + 0.5f), v.depth->cols - 1);
-        const int py = std::min(static_cast<int>(y + 0.5f), v.depth->rows - 1);
-        const float seen = v.depth->ptr<float>(py)[px];
-        if (!(seen > 0.0f) || q.z() > seen + v.depth_tolerance_m) continue;
+        const int px = std::min(static_cast<int>(x + 0.5f), v.image.width - 1);
+        const int py = std::min(static_cast<int>(y + 0.5f), v.image.height - 1);
+        const float seen = v.depth[py * v.depth_step + px];
+        if (!(seen > 0.0f) || z > seen + v.depth_tolerance_m) continue;
       }
-      // The surface must face the projector here too.
-      if (!(-pt.normal.dot(q) > 0.0f)) continue;
       SampleClamp(v.image, x, y, bgr);
       return true;
     }
@@ -278,7 +288,8 @@ class Shader {
   Eigen::Vector3f c0_ = Eigen::Vector3f::Zero(), dc1_ = c0_, dc2_ = c0_;
   // A triangle in a projector's frame.
   struct ProjectorTriangle {
-    Eigen::Vector3f q0, dq1, dq2, normal;
+    // The projector's pixel of the point (b1, b2) is (x . b, y . b) / (z . b), b = (1, b1, b2).
+    Eigen::Vector3f x, y, z;
     float score = 0.0f;  // how squarely the triangle's centre faces the projector
     int projector = 0;
   };

@@ -100,6 +100,8 @@ bool ComposeVirtualImage(const Mesh& model, const PinholeCamera& camera,
   }
   const PinholeCamera fine = camera.Scaled(0.5);
   const PixelRect fine_roi{2 * rr.x0, 2 * rr.y0, 2 * rr.x1, 2 * rr.y1};
+  // Each 2x2 block becomes one pixel below: inside a triangle, one shading of the block.
+  render_options.shade_quads = true;
   Render(model, fine, cam_from_obj, fine_roi, render_options, &w.render);
   *render_ms += timer.ElapsedMilliseconds();
   if (w.render.mask.rows != 2 * rh || w.render.mask.cols != 2 * rw) return false;
