@@ -82,7 +82,17 @@ struct RunOutcome {
   double mean_renders = 0; // render-solve rounds per frame, all levels
   double mean_levels = 0;  // pyramid levels per frame
   double cpu_ms = 0;       // process CPU time per frame in Tracker::Track (all threads)
+  // Median Tracker::Track time of the frames it returned tracked, and of those it returned
+  // lost (the re-acquisition searches), frame 0 left out; 0 when there are none.
+  double median_tracked_ms = 0, median_lost_ms = 0;
 };
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const auto middle = values.begin() + values.size() / 2;
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
 
 RunOutcome Execute(const Run& run, int max_frames) {
   cv::setNumThreads(run.threads);
@@ -100,6 +110,7 @@ RunOutcome Execute(const Run& run, int max_frames) {
   const int n =
       max_frames > 0 ? std::min(max_frames, sequence.num_frames()) : sequence.num_frames();
   RunOutcome out;
+  std::vector<double> tracked_ms, lost_ms;
   SequenceFrameSource source(&sequence);
   SessionOptions session_options;
   session_options.name = run.name;
@@ -112,12 +123,18 @@ RunOutcome Execute(const Run& run, int max_frames) {
         if (!frame.errors.empty()) ThrowError("{}", frame.errors.front().message);
         return SessionStep::FromTrack(tracker.Track(frame));
       },
-      [&](const Frame&, const SessionStep& step, const SessionFrame&) {
+      [&](const Frame& frame, const SessionStep& step, const SessionFrame&) {
         out.mean_pixels += step.track->summary.equations;
         out.mean_renders += step.track->summary.renders;
         out.mean_levels += step.track->summary.num_levels;
+        if (frame.frame_id > 0) {
+          (step.track->status == TrackStatus::kTracking ? tracked_ms : lost_ms)
+              .push_back(step.track->summary.times.total_ms);
+        }
         return true;
       });
+  out.median_tracked_ms = Median(tracked_ms);
+  out.median_lost_ms = Median(lost_ms);
   const std::vector<PoseRecord>& poses = summary.records;
   std::vector<GroundTruthFrame> truth = SequenceGroundTruth(sequence);
   truth.resize(std::min<size_t>(truth.size(), n));
@@ -152,6 +169,12 @@ nlohmann::json ToJson(const Run& run, const RunOutcome& o) {
   j["mean_renders"] = o.mean_renders;
   j["mean_levels"] = o.mean_levels;
   j["cpu_ms_per_frame"] = o.cpu_ms;
+  j["median_ms_tracked_frame"] = o.median_tracked_ms;
+  j["median_ms_lost_frame"] = o.median_lost_ms;
+  // What a lost frame's search costs against a tracked frame (the goal: at most 3x).
+  j["lost_frame_cost_ratio"] = o.median_tracked_ms > 0.0 && o.median_lost_ms > 0.0
+                                   ? nlohmann::json(o.median_lost_ms / o.median_tracked_ms)
+                                   : nlohmann::json(nullptr);
   j["stage_ms"] = {{"predict", o.mean_times.predict_ms},   {"render", o.mean_times.render_ms},
                    {"preprocess", o.mean_times.preprocess_ms},
                    {"select", o.mean_times.select_ms}, {"solve", o.mean_times.solve_ms},
