@@ -15,18 +15,24 @@ namespace {
 
 constexpr double kTurn = 10.0 * M_PI / 180.0;  // the render's view from the projector's
 
+// A camera of focal length `f` pixels whose principal point is the image's centre.
+PinholeCamera CentredCamera(int width, int height, double f) {
+  PinholeCamera camera;
+  camera.width = width;
+  camera.height = height;
+  camera.fx = camera.fy = f;
+  camera.cx = (width - 1) / 2.0;
+  camera.cy = (height - 1) / 2.0;
+  return camera;
+}
+
 void BM_RenderSphere(benchmark::State& state) {
   const int rings = static_cast<int>(state.range(0));
   const int segments = static_cast<int>(state.range(1));
   const bool roi_only = state.range(2) != 0;
   const bool color = state.range(3) != 0;
 
-  PinholeCamera camera;
-  camera.width = 512;
-  camera.height = 256;
-  camera.fx = camera.fy = 837.3;
-  camera.cx = 255.5;
-  camera.cy = 127.5;
+  const PinholeCamera camera = CentredCamera(512, 256, 837.3);
   // 0.1194 m at 1 m subtends 200 px.
   const double radius = 0.1194;
   const Mesh sphere = MakeTexturedSphere(radius, rings, segments);
@@ -64,12 +70,7 @@ BENCHMARK(BM_RenderSphere)
 // quads (RenderOptions::shade_quads).
 void BM_RenderProjective(benchmark::State& state) {
   const int rings = static_cast<int>(state.range(0));
-  PinholeCamera camera;
-  camera.width = 640;
-  camera.height = 480;
-  camera.fx = camera.fy = 600.0;
-  camera.cx = 319.5;
-  camera.cy = 239.5;
+  const PinholeCamera camera = CentredCamera(640, 480, 600.0);
   const double radius = 0.1;
   Mesh sphere = MakeTexturedSphere(radius, rings, 2 * rings);
   const Eigen::Vector3d centre(0.0, 0.0, 0.5);
