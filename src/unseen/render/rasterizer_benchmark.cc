@@ -78,16 +78,14 @@ void BM_RenderProjective(benchmark::State& state) {
   RenderOptions options;
   RenderBuffers seen;
   Render(sphere, camera, projector_from_obj, camera.ImageRect(), options, &seen);
+  const cv::Rect window(seen.roi.x0, seen.roi.y0, seen.roi.width(), seen.roi.height());
   Projector projector;
   projector.image = cv::Mat(camera.height, camera.width, CV_32FC3, cv::Scalar(0.2, 0.4, 0.6));
-  seen.color.copyTo(projector.image(cv::Rect(seen.roi.x0, seen.roi.y0, seen.roi.width(),
-                                             seen.roi.height())),
-                    seen.mask);
+  seen.color.copyTo(projector.image(window), seen.mask);
   projector.camera = camera;
   projector.cam_from_obj = projector_from_obj;
   projector.depth = cv::Mat::zeros(camera.height, camera.width, CV_32FC1);
-  seen.depth.copyTo(projector.depth(cv::Rect(seen.roi.x0, seen.roi.y0, seen.roi.width(),
-                                             seen.roi.height())));
+  seen.depth.copyTo(projector.depth(window));
   sphere.projectors.push_back(projector);
   // Rendered 2x2 supersampled, as the tracker does.
   const PinholeCamera fine = camera.Scaled(0.5);

@@ -62,7 +62,7 @@ TEST(TrackerOptions, ParsesTheReacquisitionSection) {
       "reacquisition: {use_correlation: false, seed_object_px: 32, search_radii: 6,\n"
       "  min_correlation: 0.4, max_seeds: 3, rotation_deg: 20, max_candidates: 10,\n"
       "  score_levels: 2, score_iterations: 4, refine_candidates: 3, refine_levels: 3,\n"
-      "  min_score: 0.1,\n"
+      "  min_score: 0.1, quiet_candidates: -1,\n"
       "  seed_when_doubtful: false, doubtful_confidence: 0.4, min_seed_shift_px: 2}\n");
   const ReacquisitionOptions& r = o.reacquisition;
   EXPECT_FALSE(r.use_correlation);
@@ -77,6 +77,7 @@ TEST(TrackerOptions, ParsesTheReacquisitionSection) {
   EXPECT_EQ(r.refine_candidates, 3);
   EXPECT_EQ(r.refine_levels, 3);
   EXPECT_DOUBLE_EQ(r.min_score, 0.1);
+  EXPECT_EQ(r.quiet_candidates, -1);
   EXPECT_FALSE(r.seed_when_doubtful);
   EXPECT_DOUBLE_EQ(r.doubtful_confidence, 0.4);
   EXPECT_DOUBLE_EQ(r.min_seed_shift_px, 2.0);
@@ -86,6 +87,7 @@ TEST(TrackerOptions, ParsesTheReacquisitionSection) {
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {score_levels: 0}"), Error);
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {score_iterations: 0}"), Error);
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {refine_levels: -1}"), Error);
+  EXPECT_THROW(ParseTrackerOptions("reacquisition: {quiet_candidates: -2}"), Error);
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {doubtful_confidence: 1.5}"), Error);
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {search_radius: 3}"), Error);  // unknown
 }
