@@ -27,4 +27,12 @@ void AddRegisteredCommands(CLI::App& app) {
   for (const auto& [name, adder] : commands) adder(app);
 }
 
+void AddObjectIdOption(CLI::App* cmd, int* obj_id) {
+  cmd->add_option("--obj-id", *obj_id,
+                  "Object of a scene of several, by its BOP obj_id (default: sequence.json's "
+                  "object, else the first in the ground truth); its model is "
+                  "models/obj_<id>.* unless --model gives one")
+      ->check(CLI::PositiveNumber);
+}
+
 }  // namespace unseen::cli

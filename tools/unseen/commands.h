@@ -17,6 +17,10 @@ bool RegisterCommand(const char* name, CommandAdder adder);
 // Adds every registered subcommand to `app`, sorted by name.
 void AddRegisteredCommands(CLI::App& app);
 
+// Adds --obj-id to a command that opens a sequence: which object of a scene of several
+// (a BOP scene's scene_gt.json lists each) it is about; Sequence::Open's `obj_id`.
+void AddObjectIdOption(CLI::App* cmd, int* obj_id);
+
 }  // namespace unseen::cli
 
 #define UNSEEN_REGISTER_COMMAND(name, adder) \

@@ -21,6 +21,7 @@ namespace unseen::cli {
 namespace {
 
 struct EvalArgs {
+  int obj_id = 0;  // --obj-id; 0: the sequence's own object
   std::string sequence;
   std::string poses;
   std::string bop_camera;
@@ -36,7 +37,7 @@ void RunEval(const EvalArgs& args) {
   namespace fs = std::filesystem;
   UNSEEN_CHECK(Exists(args.sequence), "eval: sequence '{}' does not exist", args.sequence);
   UNSEEN_CHECK(IsFile(args.poses), "eval: pose file '{}' does not exist", args.poses);
-  const Sequence sequence = Sequence::Open(args.sequence);
+  const Sequence sequence = Sequence::Open(args.sequence, args.obj_id);
   std::vector<GroundTruthFrame> ground_truth = SequenceGroundTruth(sequence);
   const std::vector<PoseRecord> poses = ReadPosesForSequence(args.poses, sequence, args.bop_camera);
   std::optional<GroundTruthAudit> audit;
@@ -88,6 +89,7 @@ void AddEvalCommand(CLI::App& app) {
       "of a sequence: position and orientation errors, success at 5 cm/5 deg and 2 cm/2 deg, "
       "lost frames, first failure, fps");
   cmd->add_option("SEQ", args->sequence, "Sequence folder (with ground truth)")->required();
+  AddObjectIdOption(cmd, &args->obj_id);
   cmd->add_option("POSES", args->poses, "Pose stream (.csv, .jsonl) or BOP scene_gt.json")
       ->required();
   cmd->add_flag("--json", args->json, "Print one JSON object instead of the table");

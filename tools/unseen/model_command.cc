@@ -25,6 +25,7 @@ namespace unseen::cli {
 namespace {
 
 struct ModelArgs {
+  int obj_id = 0;  // --obj-id; 0: the sequence's own object
   std::string sequence;
   int frame = 0;
   UnknownObjectArgs object;
@@ -79,7 +80,7 @@ void WriteDebugImages(const std::string& dir, const ModelBuild& build, const cv:
 
 void RunModel(const ModelArgs& args) {
   UNSEEN_CHECK(Exists(args.sequence), "model: sequence '{}' does not exist", args.sequence);
-  const Sequence sequence = Sequence::Open(args.sequence);
+  const Sequence sequence = Sequence::Open(args.sequence, args.obj_id);
   UNSEEN_CHECK(args.frame >= 0 && args.frame < sequence.num_frames(),
                "model: --frame {} is outside [0, {})", args.frame, sequence.num_frames());
   const ModellerOptions options = ModellerOptionsFor(args.object, sequence, "model");
@@ -122,6 +123,7 @@ void AddModelCommand(CLI::App& app) {
       "Build a textured model of the object from one frame (depth, mesh, projective "
       "texture) and write it");
   cmd->add_option("SEQ", args->sequence, "Sequence folder")->required();
+  AddObjectIdOption(cmd, &args->obj_id);
   cmd->add_option("--frame", args->frame, "Frame index to model");
   cmd->add_option("--init", args->object.init,
                   "gt: build in the ground truth's object frame (evaluation)");

@@ -21,6 +21,7 @@ namespace unseen::cli {
 namespace {
 
 struct OverlayArgs {
+  int obj_id = 0;  // --obj-id; 0: the sequence's own object
   std::string sequence;
   std::string poses;
   std::string bop_camera;
@@ -38,7 +39,7 @@ void RunOverlay(const OverlayArgs& args) {
                args.poses);
   UNSEEN_CHECK(std::isfinite(args.fps) && args.fps >= 0.0,
                "overlay: --fps must be > 0 (or 0 for the sequence's), got {}", args.fps);
-  Sequence sequence = Sequence::Open(args.sequence);
+  Sequence sequence = Sequence::Open(args.sequence, args.obj_id);
   const std::vector<PoseRecord> poses = ReadPosesForSequence(args.poses, sequence, args.bop_camera);
   const std::string camera = args.camera.empty()
                                  ? sequence.rig().cameras.at(sequence.reference_camera()).name
@@ -59,6 +60,7 @@ void AddOverlayCommand(CLI::App& app) {
       "Draw the model's outline at the estimated pose (green tracking, red lost) and at the "
       "ground truth (blue) over the frames; write a video (.mp4, .avi) or PNG frames (folder)");
   cmd->add_option("SEQ", args->sequence, "Sequence folder")->required();
+  AddObjectIdOption(cmd, &args->obj_id);
   cmd->add_option("POSES", args->poses, "Pose stream (.csv, .jsonl) or BOP scene_gt.json")
       ->required();
   cmd->add_option("OUT", args->out, "Output .mp4 / .avi file, or a folder for PNG frames")

@@ -35,6 +35,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct RunArgs {
+  int obj_id = 0;  // --obj-id; 0: the sequence's own object
   std::string source;
   int camera = -1;  // live camera index
   std::string calibration;
@@ -71,7 +72,7 @@ std::unique_ptr<FrameSource> OpenSource(const RunArgs& args) {
                "folder) or --camera N");
   UNSEEN_CHECK(fs::exists(args.source), "run: source '{}' does not exist", args.source);
   if (fs::is_directory(args.source) && IsSequenceFolder(args.source)) {
-    return std::make_unique<SequenceFrameSource>(Sequence::Open(args.source));
+    return std::make_unique<SequenceFrameSource>(Sequence::Open(args.source, args.obj_id));
   }
   UNSEEN_CHECK(!args.calibration.empty(),
                "run: '{}' is not a sequence folder: a video or image folder needs --calibration "
@@ -215,6 +216,7 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_option("SOURCE", args->source,
                   "Sequence folder, video file or image folder (the latter two with "
                   "--calibration)");
+  AddObjectIdOption(cmd, &args->obj_id);
   cmd->add_option("--camera", args->camera, "Live camera index (OpenCV VideoCapture)");
   cmd->add_option("--calibration", args->calibration,
                   "Camera calibration (OpenCV YAML/XML/JSON or ROS camera_info)");

@@ -38,6 +38,7 @@ namespace unseen::cli {
 namespace {
 
 struct TrackArgs {
+  int obj_id = 0;  // --obj-id; 0: the sequence's own object
   std::string sequence;
   std::string model;
   std::string model_units = "mm";
@@ -103,7 +104,7 @@ void RunTrack(const TrackArgs& args) {
                "track: --model-scale {} must be > 0", args.model_scale);
   UNSEEN_CHECK(args.model_units == "mm" || args.model_units == "m",
                "track: --model-units '{}' must be mm or m", args.model_units);
-  Sequence sequence = Sequence::Open(args.sequence);
+  Sequence sequence = Sequence::Open(args.sequence, args.obj_id);
   const std::string reference_name = sequence.rig().cameras.at(sequence.reference_camera()).name;
   if (!args.cameras.empty()) sequence.SelectCameras(SplitComma(args.cameras));
   TrackerOptions options =
@@ -158,7 +159,9 @@ void RunTrack(const TrackArgs& args) {
     model = updater->Start(build);
   } else if (args.model.empty()) {
     UNSEEN_CHECK(!sequence.model_path().empty(),
-                 "track: sequence '{}' has no model; give one with --model", args.sequence);
+                 "track: sequence '{}' has no model of object {} (no models/obj_{:06d}.ply|obj|"
+                 "gltf|glb); give one with --model, or another object with --obj-id",
+                 args.sequence, sequence.obj_id(), sequence.obj_id());
     model = sequence.LoadModel();
   } else {
     model = LoadMesh(args.model, args.model_units == "mm" ? 0.001 : 1.0);
@@ -321,6 +324,7 @@ void AddTrackCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "track", "Track the object of a sequence in 6 DoF from an initial pose; write the poses");
   cmd->add_option("SEQ", args->sequence, "Sequence folder")->required();
+  AddObjectIdOption(cmd, &args->obj_id);
   cmd->add_option("--model", args->model, "Model file (default: the sequence's model)");
   cmd->add_option("--model-units", args->model_units, "Units of --model: mm (BOP) or m");
   cmd->add_option("--model-scale", args->model_scale, "Scale the model by this factor");

@@ -153,5 +153,55 @@ TEST_F(TrackCli, SequenceWithoutAnyImageFailsClearly) {
   EXPECT_NE(r.err.find("000000.png"), std::string::npos) << r.err;
 }
 
+// A BOP dataset as it is: dataset/models/obj_<id>.ply beside dataset/test/<scene>/, whose
+// scene_gt.json lists several objects per frame. --obj-id picks the one to track and score.
+TEST_F(TrackCli, ObjIdPicksTheObjectOfABopSceneOfSeveral) {
+  const fs::path dataset = TempPath("bop"), scene = dataset / "test" / "000003";
+  fs::remove_all(dataset);
+  fs::create_directories(scene);
+  fs::create_directories(dataset / "models");
+  for (const char* file : {"obj_000001.ply", "obj_000001.png"}) {
+    fs::copy_file(fs::path(dir_) / "models" / file, dataset / "models" / file);
+  }
+  fs::copy(fs::path(dir_) / "cam0" / "rgb", scene / "rgb", fs::copy_options::recursive);
+  fs::copy_file(fs::path(dir_) / "cam0" / "scene_camera.json", scene / "scene_camera.json");
+  // Object 7 (no model here) comes first in every frame: the default object.
+  nlohmann::json gt = nlohmann::json::parse(ReadText((fs::path(dir_) / "cam0" / "scene_gt.json").string()));
+  for (auto& [frame, objects] : gt.items()) {
+    nlohmann::json other = objects[0];
+    other["obj_id"] = 7;
+    other["cam_t_m2c"] = {150.0, 80.0, 1400.0};
+    objects.insert(objects.begin(), other);
+  }
+  std::ofstream(scene / "scene_gt.json") << gt.dump(1);
+
+  const std::string poses = TempPath("bop_poses.csv");
+  const RunResult chosen = RunCli(
+      fmt::format("-q track '{}' --obj-id 1 --init gt --out '{}'", scene.string(), poses));
+  ASSERT_EQ(chosen.exit_code, 0) << chosen.err;
+  const RunResult scored =
+      RunCli(fmt::format("eval '{}' '{}' --obj-id 1 --json", scene.string(), poses));
+  ASSERT_EQ(scored.exit_code, 0) << scored.err;
+  const nlohmann::json j = nlohmann::json::parse(scored.out);
+  EXPECT_EQ(j["success_5cm5deg"].get<double>(), 1.0) << scored.out;
+  EXPECT_LT(j["mean_trans_err_mm"].get<double>(), 5.0) << scored.out;
+  // Scored against object 7's ground truth instead, the same poses are far off.
+  const RunResult other = RunCli(fmt::format("eval '{}' '{}' --json", scene.string(), poses));
+  ASSERT_EQ(other.exit_code, 0) << other.err;
+  EXPECT_EQ(nlohmann::json::parse(other.out)["success_5cm5deg"].get<double>(), 0.0);
+
+  // The default object has no model: said so, naming the object.
+  const RunResult first = RunCli(fmt::format("track '{}' --init gt", scene.string()));
+  EXPECT_EQ(first.exit_code, 1);
+  EXPECT_NE(first.err.find("obj_000007"), std::string::npos) << first.err;
+  // An object the scene does not have is an error listing those it has.
+  const RunResult absent = RunCli(fmt::format("track '{}' --obj-id 9 --init gt", scene.string()));
+  EXPECT_EQ(absent.exit_code, 1);
+  EXPECT_NE(absent.err.find("object 9 is in no frame"), std::string::npos) << absent.err;
+  EXPECT_NE(absent.err.find("1, 7"), std::string::npos) << absent.err;
+  fs::remove_all(dataset);
+  fs::remove(poses);
+}
+
 }  // namespace
 }  // namespace unseen

@@ -286,6 +286,19 @@ int FirstObjectId(const std::string& gt_file) {
   return 0;
 }
 
+// Every obj_id of a scene_gt.json.
+std::set<int> ObjectIds(const std::string& gt_file) {
+  const json gt = bop::ReadJsonFile(gt_file);
+  UNSEEN_CHECK(gt.is_object(), "{}: expected a JSON object keyed by frame id", gt_file);
+  std::set<int> ids;
+  for (const auto& [key, list] : gt.items()) {
+    const std::string what = fmt::format("{} frame {}", gt_file, key);
+    UNSEEN_CHECK(list.is_array(), "{}: expected a list of objects, got {}", what, list.dump());
+    for (const json& entry : list) ids.insert(bop::GetInt(entry, "obj_id", what));
+  }
+  return ids;
+}
+
 // Reads scene_gt.json of `source` for object `obj_id` (entries of other objects are only
 // checked for an integer obj_id). Frame ids must be frames of scene_camera.json.
 void ReadGroundTruth(int obj_id, const std::vector<int>& frame_ids, CameraSource* source) {
@@ -387,8 +400,10 @@ Sequence::Sequence(Sequence&&) noexcept = default;
 Sequence& Sequence::operator=(Sequence&&) noexcept = default;
 Sequence::~Sequence() = default;
 
-Sequence Sequence::Open(const std::string& path) {
+Sequence Sequence::Open(const std::string& path, int obj_id) {
   UNSEEN_CHECK(IsFolder(path), "{}: sequence folder not found", path);
+  UNSEEN_CHECK(obj_id >= 0, "{}: object id {} must be positive (0: the sequence's own)", path,
+               obj_id);
   auto impl = std::make_unique<Impl>();
   impl->kind = Kind::kBop;
   impl->path = path;
@@ -489,7 +504,8 @@ Sequence Sequence::Open(const std::string& path) {
   impl->reference_source =
       static_cast<int>(std::find(names.begin(), names.end(), reference_name) - names.begin());
 
-  // Object id: sequence.json, else the first object in the ground truth.
+  // Object id: sequence.json's, else the first object in the ground truth; the caller's
+  // when given (then sequence.json's model, another object's, is not used).
   if (declared_obj_id) {
     impl->obj_id = *declared_obj_id;
   } else {
@@ -502,6 +518,22 @@ Sequence Sequence::Open(const std::string& path) {
         if (impl->obj_id != 0) break;
       }
     }
+  }
+  if (obj_id > 0 && obj_id != impl->obj_id) {
+    std::set<int> present;
+    bool any_gt = false;
+    for (const fs::path& dir : dirs) {
+      const fs::path gt = dir / "scene_gt.json";
+      if (!Exists(gt)) continue;
+      any_gt = true;
+      const std::set<int> ids = ObjectIds(gt.string());
+      present.insert(ids.begin(), ids.end());
+    }
+    UNSEEN_CHECK(!any_gt || present.count(obj_id),
+                 "{}: object {} is in no frame of its scene_gt.json (objects there: {})", path,
+                 obj_id, fmt::join(present, ", "));
+    impl->obj_id = obj_id;
+    impl->model_path.clear();
   }
   for (CameraSource& source : impl->sources) {
     ReadGroundTruth(impl->obj_id, impl->frame_ids, &source);

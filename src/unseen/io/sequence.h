@@ -56,9 +56,12 @@ class Sequence {
   //    (a dropped frame) is a warning here and a read error of that frame; a camera with
   //    no image at all is an error. The image size is read from the first image present;
   //    ReadFrame checks every image against it.
-  //  * The object id is sequence.json's object.obj_id, else the first obj_id of the
-  //    ground truth.
-  static Sequence Open(const std::string& path);
+  //  * The object id is `obj_id` when positive (in a scene of several objects, as BOP's
+  //    are, the one to track; its model is then models/obj_<id>.*, sequence.json's
+  //    object.model being another object's), else sequence.json's object.obj_id, else the
+  //    first obj_id of the ground truth. An `obj_id` that the sequence has ground truth for
+  //    in no frame is an error.
+  static Sequence Open(const std::string& path, int obj_id = 0);
   // A video file or a folder of images (sorted by name) as a one-camera sequence without
   // ground truth. `camera` gives the intrinsics; its width/height may be 0 (taken from
   // the first frame) but must match the frames when given.

@@ -239,6 +239,20 @@ TEST(Sequence, ReadsSmallMultiCameraSequence) {
   ExpectError([&] { seq.ReadFrame(3); }, {"frame index 3"});
 }
 
+TEST(Sequence, OpensTheObjectAskedForInASceneOfSeveral) {
+  const fs::path dir = TestDir();
+  TestSequence t;
+  t.Write(dir);
+  const Sequence five = Sequence::Open(dir.string(), 5);
+  EXPECT_EQ(five.obj_id(), 5);
+  EXPECT_TRUE(five.GroundTruthFromCamera(0, 0)->translation().isApprox(
+      Eigen::Vector3d(0, 0, 0.001), 1e-12));
+  EXPECT_EQ(Sequence::Open(dir.string(), 3).obj_id(), 3);  // sequence.json's own
+  ExpectError([&] { Sequence::Open(dir.string(), 4); },
+              {"object 4 is in no frame", "objects there: 3, 5"});
+  ExpectError([&] { Sequence::Open(dir.string(), -1); }, {"object id -1"});
+}
+
 TEST(Sequence, UndistortsWithTheSameIntrinsics) {
   const fs::path dir = TestDir();
   TestSequence t;
