@@ -202,6 +202,7 @@ void Tracker::Initialize(const Rigid3d& world_from_obj) {
   status_ = TrackStatus::kTracking;
   bad_frames_ = 0;
   recent_correction_px_ = std::numeric_limits<double>::infinity();
+  finest_level_ = 0;
   residual_reference_px_ = 0.0;
   region_residual_reference_ = 0.0;
   area_reference_px_ = 0.0;
@@ -224,6 +225,32 @@ int Tracker::NumLevelsFor(const Rigid3d& world_from_obj) const {
   const int levels = 1 + static_cast<int>(std::floor(std::log2(diameter_px /
                                                                options_.pyramid.min_object_px)));
   return std::clamp(levels, 1, options_.pyramid.max_levels);
+}
+
+int Tracker::FinestLevelFor(const Rigid3d& world_from_obj) const {
+  const PyramidOptions& po = options_.pyramid;
+  if (po.max_finest_px <= 0.0) return 0;
+  // The largest share of an image the object's rectangle covers, level-0 pixels.
+  double area_px = 0.0;
+  for (int c = 0; c < rig_.size(); ++c) {
+    const PinholeCamera& cam = rig_.cameras[c].intrinsics;
+    const std::optional<PixelRect> rect = ObjectRect(cam, cam_from_world_[c] * world_from_obj);
+    if (!rect) continue;
+    const PixelRect in_image = rect->Intersect(LevelRect(cam.width, cam.height, 0));
+    if (in_image.empty()) continue;
+    area_px = std::max(area_px, double(in_image.width()) * double(in_image.height()));
+  }
+  int level = 0;
+  while (level + 1 < po.max_levels && area_px / double(1 << (2 * level)) > po.max_finest_px) {
+    ++level;
+  }
+  // Back to a finer level only once the object fits it with room to spare: no switching
+  // back and forth from frame to frame at the budget's edge.
+  if (level < finest_level_ &&
+      area_px / double(1 << (2 * level)) > po.finest_hysteresis * po.max_finest_px) {
+    level = std::min(finest_level_, level + 1);
+  }
+  return level;
 }
 
 double Tracker::UpdatePixels(const Rigid3d& world_from_obj, const Vector6d& twist,
@@ -379,8 +406,17 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
   TrackResult result;
   SolveSummary& s = result.summary;
   // Levels [finest, s.num_levels), coarsest first; the finest one's rows are the result's.
-  const int finest = span.finest;
-  s.num_levels = finest + (span.num_levels > 0 ? span.num_levels : NumLevelsFor(start));
+  // A tracking alignment (from level 0) stops at the pixel budget's level; span.num_levels
+  // still counts from level 0 then, and at least the budget's level runs.
+  const bool budgeted = span.finest == 0 && !span.scoring;
+  const int finest = budgeted ? FinestLevelFor(start) : span.finest;
+  const int levels = span.num_levels > 0 ? span.num_levels : NumLevelsFor(start);
+  s.num_levels = budgeted ? std::max(levels, finest + 1) : finest + levels;
+  if (budgeted) finest_level_ = finest;
+  // The level that stands for full resolution (iterations, stops, learning, level-0 units):
+  // the budget's; a scoring span's finest level is a coarse one and keeps coarse stops.
+  const int full_resolution = budgeted ? finest : 0;
+  s.finest_level = full_resolution;
   s.iterations_per_level.assign(s.num_levels, 0);
   // Input around the object: what the filters need beyond the rim and, with the region
   // modality, a whole correspondence line outside the contour (a line that leaves the
@@ -434,14 +470,14 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
     }
     s.times.preprocess_ms += timer.ElapsedMilliseconds();
 
-    int max_iterations = level == 0
+    int max_iterations = level == full_resolution
                              ? po.max_iterations_per_level
                              : std::min(po.max_iterations_per_level, po.coarse_max_iterations);
     if (span.max_iterations > 0) max_iterations = std::min(max_iterations, span.max_iterations);
     // The first frame's checks measure how far each modality pulls the given pose (the
     // appearance's drag): there the coarse levels run to the stricter stop.
     const bool texture_leads = PhotometricJudges() && !learn_from_start_;
-    const double min_update_px = level == 0      ? po.min_update_px
+    const double min_update_px = level == full_resolution ? po.min_update_px
                                  : texture_leads ? po.photometric_coarse_min_update_px
                                                  : po.coarse_min_update_px;
     for (int iteration = 0; iteration < max_iterations; ++iteration) {
@@ -523,7 +559,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
         round.photometric_region = &w.region;
         round.photometric_depth = &w.depth_used;
         if (use_depth && !frame.depths[c].empty()) round.measured_depth = &frame.depths[c];
-        round.learn = level == 0 && !span.scoring;
+        round.learn = level == full_resolution && !span.scoring;
         round.first_frame = learn_from_start_;
         switch (jobs[j] % kModalityJobs) {
           case kPhotometricJob:
@@ -553,6 +589,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
           const CameraWork& w = *work_[c];
           if (w.active && w.virtual_ok) s.object_px += cv::countNonZero(w.virtual_image.mask);
         }
+        s.object_px *= double(1 << (2 * full_resolution));  // level-0 pixels
         s.depth_counts = depth_.counts();
         s.depth_equations = solution.modalities[1].equations;
         s.depth_residual_m = solution.modalities[1].initial_rms;

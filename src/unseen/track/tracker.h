@@ -51,11 +51,12 @@ struct StageTimes {
 // What the alignment of one frame did.
 struct SolveSummary {
   int num_levels = 0;                     // pyramid depth: the coarsest level used + 1
+  int finest_level = 0;  // the pixel budget's finest level (PyramidOptions::max_finest_px)
   std::vector<int> iterations_per_level;  // solves; index = level (0 = full resolution;
                                           // 0 solves below AlignLevels' finest level)
   int renders = 0;                       // render-solve rounds over all levels
   int resamples = 0;                     // solves that re-measured a round's rows instead
-  double object_px = 0.0;  // the object's rendered area in the last level-0 round, all cameras
+  double object_px = 0.0;  // the object's rendered area in the finest level's last round, all cameras, level-0 px
   SelectionCounts counts;                // last round at the finest level, all cameras
   int equations = 0;                     // equations of that round
   double initial_residual_px = 0.0;      // RMS normal flow |It|/|grad| before its update
@@ -146,6 +147,9 @@ class Tracker {
 
   // Pyramid levels the alignment would use for the object at `world_from_obj`.
   int NumLevelsFor(const Rigid3d& world_from_obj) const;
+  // The finest level a tracking alignment of the object at `world_from_obj` runs to
+  // (PyramidOptions::max_finest_px, with hysteresis from the last alignment's).
+  int FinestLevelFor(const Rigid3d& world_from_obj) const;
 
   const Rig& rig() const { return rig_; }
   // The model as rendered: the given one or, with LiveAppearanceOptions, the given one with
@@ -301,6 +305,8 @@ class Tracker {
   int coasted_frames_ = 0;
   // Decaying maximum of the recent corrections, level-0 pixels (infinite: unknown).
   double recent_correction_px_ = std::numeric_limits<double>::infinity();
+  // The finest level of the last tracking alignment (PyramidOptions::max_finest_px).
+  int finest_level_ = 0;
   std::unique_ptr<Reacquisition> reacquisition_;
   // Running mean of the residual of the confident frames (FailureOptions); 0 = none yet.
   double residual_reference_px_ = 0.0;

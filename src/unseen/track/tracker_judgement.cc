@@ -22,8 +22,11 @@ double Ramp(double value, double zero_at, double one_at) {
 double Tracker::PhotometricFit(const SolveSummary& s, bool with_references) const {
   const FailureOptions& f = options_.failure;
   if (s.counts.used < f.min_pixels) return 0.0;
+  // Used pixels in level-0 pixels: a large object aligned at a coarser finest level
+  // (PyramidOptions::max_finest_px) is as well supported as at level 0.
+  const double used_px = double(s.counts.used) * double(1 << (2 * s.finest_level));
   const double support_term = std::max(Ramp(s.share, f.min_share, f.good_share),
-                                       Ramp(double(s.counts.used), f.min_used_px, f.good_used_px));
+                                       Ramp(used_px, f.min_used_px, f.good_used_px));
   double residual_term = Ramp(s.initial_residual_px, f.bad_residual_px, f.good_residual_px);
   if (with_references && residual_reference_px_ > 0.0) {
     const double reference = std::max(residual_reference_px_, f.min_reference_residual_px);

@@ -48,6 +48,10 @@ void PyramidOptions::Check() const {
                "pyramid.correction_decay {} must be in [0, 1)", correction_decay);
   UNSEEN_CHECK(supersampled_levels >= 0 && supersampled_levels <= 8,
                "pyramid.supersampled_levels {} must be in [0, 8]", supersampled_levels);
+  UNSEEN_CHECK(max_finest_px == 0.0 || (max_finest_px >= 1024.0 && std::isfinite(max_finest_px)),
+               "pyramid.max_finest_px {} must be 0 (no budget) or >= 1024", max_finest_px);
+  UNSEEN_CHECK(finest_hysteresis > 0.0 && finest_hysteresis <= 1.0,
+               "pyramid.finest_hysteresis {} must be in (0, 1]", finest_hysteresis);
 }
 
 void FailureOptions::Check() const {
@@ -236,6 +240,8 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"resample_margin_px", YamlField(&py.resample_margin_px)},
         {"rim_px", YamlField(&py.rim_px)},
         {"supersampled_levels", YamlField(&py.supersampled_levels)},
+        {"max_finest_px", YamlField(&py.max_finest_px)},
+        {"finest_hysteresis", YamlField(&py.finest_hysteresis)},
         {"adaptive_levels", YamlField(&py.adaptive_levels)},
         {"min_adaptive_levels", YamlField(&py.min_adaptive_levels)},
         {"capture_px", YamlField(&py.capture_px)},

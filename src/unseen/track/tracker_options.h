@@ -76,6 +76,14 @@ struct PyramidOptions {
   // area-averaged silhouette and texture of a camera image (a point-sampled silhouette pasted
   // over the input biases the pose outwards by about a quarter pixel).
   int supersampled_levels = 8;
+  // Pixel budget of the finest level: an object whose rectangle (its bounding box's
+  // projection) covers more than max_finest_px pixels of an image at level 0 is aligned
+  // no finer than the first level where it covers at most that many; 0: always down to
+  // level 0. An object near the camera fills the frame at 10-20 fps at level 0 and is
+  // placed as well at level 1, where it is still hundreds of pixels across. A finer level
+  // is taken again only once the object fits it within finest_hysteresis of the budget.
+  double max_finest_px = 90000.0;
+  double finest_hysteresis = 0.7;
   // While tracking, use only as many levels as the expected prediction error needs: the
   // finest level captures about capture_px pixels and each coarser one doubles that; the
   // expected error is prediction_margin times the largest recent correction (a maximum

@@ -29,7 +29,8 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
       "selection: {color_mode: raw, use_occlusion_rejection: false, block_min_share_ratio: 0}\n"
       "solver: {kernel: tukey, kernel_width: 4.685}\n"
       "pyramid: {max_levels: 2, adaptive_levels: false, min_adaptive_levels: 1, capture_px: 3,\n"
-      "          photometric_coarse_min_update_px: 0.5}\n"
+      "          photometric_coarse_min_update_px: 0.5, max_finest_px: 40000,\n"
+      "          finest_hysteresis: 0.5}\n"
       "predictor: {type: none, min_confidence: 0.4, confidence_power: 2}\n"
       "failure: {lost_after_frames: 5, good_used_px: 3000, bad_residual_ratio: 2.0}\n"
       "frame_interval_s: 0.04\n"
@@ -45,6 +46,8 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
   EXPECT_EQ(o.pyramid.min_adaptive_levels, 1);
   EXPECT_EQ(o.pyramid.capture_px, 3.0);
   EXPECT_DOUBLE_EQ(o.pyramid.photometric_coarse_min_update_px, 0.5);
+  EXPECT_DOUBLE_EQ(o.pyramid.max_finest_px, 40000.0);
+  EXPECT_DOUBLE_EQ(o.pyramid.finest_hysteresis, 0.5);
   EXPECT_DOUBLE_EQ(o.pyramid.coarse_min_update_px, 0.3);  // untouched default
   EXPECT_EQ(o.predictor.type, PredictorType::kHold);
   EXPECT_DOUBLE_EQ(o.predictor.min_confidence, 0.4);
@@ -131,6 +134,10 @@ TEST(TrackerOptions, RejectsBadFilesNamingTheKey) {
   EXPECT_NE(message("pyramid: {resample_iterations: -1}").find("pyramid.resample_iterations"),
             std::string::npos);
   EXPECT_NE(message("pyramid: {rerender_px: .nan}").find("pyramid.rerender_px"), std::string::npos);
+  EXPECT_NE(message("pyramid: {max_finest_px: 100}").find("pyramid.max_finest_px"),
+            std::string::npos);
+  EXPECT_NE(message("pyramid: {finest_hysteresis: 0}").find("pyramid.finest_hysteresis"),
+            std::string::npos);
   EXPECT_NE(message("pyramid: {photometric_coarse_min_update_px: -1}")
                 .find("pyramid.photometric_coarse_min_update_px"),
             std::string::npos);

@@ -375,6 +375,67 @@ TEST_F(TrackerScene, AdaptivePyramidUsesFewerLevelsForSmallMotionsAndAllForAJump
   EXPECT_EQ(r.summary.num_levels, full) << r.BriefReport();
 }
 
+// The level-0 area of the rectangle of the cube's corners in the image (a cube's bounding
+// box is the cube).
+double ObjectAreaPx(const Mesh& mesh, const PinholeCamera& cam, const Rigid3d& cam_from_obj) {
+  std::vector<Eigen::Vector3d> corners;
+  for (const Eigen::Vector3f& v : mesh.vertices) corners.push_back(cam_from_obj * v.cast<double>());
+  const std::optional<PixelRect> rect = cam.PointsRect(corners);
+  if (!rect) return 0.0;
+  const PixelRect in_image = rect->Intersect(cam.ImageRect());
+  return double(in_image.width()) * double(in_image.height());
+}
+
+TEST_F(TrackerScene, ALargeObjectIsAlignedAtTheBudgetsLevelAsWellAsAtLevelZero) {
+  // The cube 0.4 m away: ~250 px across, its rectangle clipped by the 256 rows.
+  const Rigid3d near(truth_.rotation(), Eigen::Vector3d(0.01, -0.005, 0.4));
+  const PinholeCamera& cam = rig_.cameras[0].intrinsics;
+  const double area_px = ObjectAreaPx(cube_, cam, near);
+  ASSERT_GT(area_px, 60000.0);
+  const cv::Mat background = Background(cam, 3);
+  TrackerOptions budget;
+  budget.pyramid.max_finest_px = 0.5 * area_px;  // level 1 holds a quarter of it
+  TrackerOptions full = budget;
+  full.pyramid.max_finest_px = 0.0;
+  Tracker budgeted(rig_, cube_, budget), unbudgeted(rig_, cube_, full);
+  budgeted.Initialize(near);
+  unbudgeted.Initialize(near);
+  Rigid3d last = near;
+  for (int k = 1; k <= 6; ++k) {
+    const Rigid3d pose(ExpSO3(Eigen::Vector3d(0, 0.004 * k, 0)) * near.rotation(),
+                       near.translation() + Eigen::Vector3d(0.001 * k, 0.0005 * k, 0));
+    const cv::Mat image = Synthesize(cube_, rig_.cameras[0], pose, background);
+    const TrackResult b = budgeted.Track({image});
+    const TrackResult u = unbudgeted.Track({image});
+    EXPECT_EQ(b.summary.finest_level, 1) << b.BriefReport();
+    EXPECT_EQ(u.summary.finest_level, 0) << u.BriefReport();
+    EXPECT_EQ(b.status, TrackStatus::kTracking) << b.BriefReport();
+    // Judged in level-0 units: as confident as the level-0 alignment.
+    EXPECT_GT(b.confidence, 0.9) << b.BriefReport();
+    EXPECT_GT(b.summary.object_px, 0.5 * u.summary.object_px);
+    EXPECT_LT(b.summary.object_px, 2.0 * u.summary.object_px);
+    EXPECT_LT(Difference(b.world_from_obj, pose).translation, 5e-4) << b.BriefReport();
+    EXPECT_LT(Difference(b.world_from_obj, pose).rotation_rad, 0.2 * kDeg) << b.BriefReport();
+    EXPECT_LT(Difference(u.world_from_obj, pose).translation, 5e-4) << u.BriefReport();
+    last = b.world_from_obj;
+  }
+  // Back at level 0 only once the object fits the budget with room to spare.
+  const auto at_depth = [&](double z) {
+    return Rigid3d(last.rotation(), Eigen::Vector3d(last.translation().x(),
+                                                    last.translation().y(), z));
+  };
+  double z_tight = last.translation().z(), z_roomy = z_tight;
+  while (ObjectAreaPx(cube_, cam, at_depth(z_tight)) > 0.85 * budget.pyramid.max_finest_px) {
+    z_tight += 0.005;
+  }
+  while (ObjectAreaPx(cube_, cam, at_depth(z_roomy)) > 0.6 * budget.pyramid.max_finest_px) {
+    z_roomy += 0.005;
+  }
+  EXPECT_EQ(budgeted.FinestLevelFor(at_depth(z_tight)), 1);  // within the hysteresis
+  EXPECT_EQ(budgeted.FinestLevelFor(at_depth(z_roomy)), 0);
+  EXPECT_EQ(unbudgeted.FinestLevelFor(near), 0);
+}
+
 TEST_F(TrackerScene, SameResultOnOneAndTwoThreads) {
   Vector6d d;
   d << 0.004, -0.003, 0.01, 2 * kDeg, -2 * kDeg, 1 * kDeg;
