@@ -56,7 +56,8 @@ struct SolveSummary {
                                           // 0 solves below AlignLevels' finest level)
   int renders = 0;                       // render-solve rounds over all levels
   int resamples = 0;                     // solves that re-measured a round's rows instead
-  double object_px = 0.0;  // the object's rendered area in the finest level's last round, all cameras, level-0 px
+  // The object's rendered area in the finest level's last round, all cameras, level-0 px.
+  double object_px = 0.0;
   SelectionCounts counts;                // last round at the finest level, all cameras
   int equations = 0;                     // equations of that round
   double initial_residual_px = 0.0;      // RMS normal flow |It|/|grad| before its update
