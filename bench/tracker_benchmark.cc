@@ -55,7 +55,7 @@ struct BenchArgs {
   // cameras; other recordings), comma-separated; default $UNSEEN_HELDOUT_SEQUENCES.
   std::string heldout_dirs;
   std::string groups =
-      "dev,heldout,modalities,synthetic,color,scale,speed,occlusion,linf,model_size";
+      "dev,heldout,modalities,synthetic,color,scale,speed,occlusion,linf,model_size,budget";
   int max_frames = 0;  // 0 = all
   // Tracker options (YAML) every run starts from instead of the defaults, so that a
   // setting can be compared across all groups; empty: the defaults.
@@ -346,6 +346,14 @@ std::vector<Run> PlanRuns(const BenchArgs& args, const std::vector<std::string>&
     for (const auto& [name, thesis] : speeds) {
       add({"speed", name, SyntheticSequence(args, name), defaults, {}, 1, thesis});
     }
+  }
+  if (wanted("budget")) {
+    // The pixel budget of the finest level (pyramid.max_finest_px) against level 0 always.
+    const std::string seq = SyntheticSequence(args, "box_closeup");
+    TrackerOptions level0 = defaults;
+    level0.pyramid.max_finest_px = 0.0;
+    add({"budget", "box_closeup budget", seq, defaults, {}, 1, ""});
+    add({"budget", "box_closeup level 0", seq, level0, {}, 1, ""});
   }
   if (wanted("occlusion")) {
     std::vector<std::pair<std::string, std::string>> seqs = {
