@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <set>
 
 #include <fmt/format.h>
@@ -272,14 +273,27 @@ CameraSource ReadBopCamera(const std::string& name, const fs::path& dir, bool st
   return source;
 }
 
+// A camera's scene_gt.json, parsed once per open (BOP scenes' files run to many MB).
+struct GroundTruthFile {
+  std::string path;
+  json doc;  // a JSON object keyed by frame id
+};
+
+// `dir`/scene_gt.json, or nothing when the folder has none.
+std::optional<GroundTruthFile> LoadGroundTruthFile(const fs::path& dir) {
+  const fs::path path = dir / "scene_gt.json";
+  if (!Exists(path)) return std::nullopt;
+  GroundTruthFile file{path.string(), bop::ReadJsonFile(path.string())};
+  UNSEEN_CHECK(file.doc.is_object(), "{}: expected a JSON object keyed by frame id", file.path);
+  return file;
+}
+
 // The first obj_id in a scene_gt.json (lowest frame id first), or 0 when it has none.
-int FirstObjectId(const std::string& gt_file) {
-  const json gt = bop::ReadJsonFile(gt_file);
-  UNSEEN_CHECK(gt.is_object(), "{}: expected a JSON object keyed by frame id", gt_file);
+int FirstObjectId(const GroundTruthFile& gt) {
   std::map<int, const json*> frames;
-  for (const auto& [key, list] : gt.items()) frames[bop::ParseFrameId(key, gt_file)] = &list;
+  for (const auto& [key, list] : gt.doc.items()) frames[bop::ParseFrameId(key, gt.path)] = &list;
   for (const auto& [id, list] : frames) {
-    const std::string what = fmt::format("{} frame {}", gt_file, id);
+    const std::string what = fmt::format("{} frame {}", gt.path, id);
     UNSEEN_CHECK(list->is_array(), "{}: expected a list of objects, got {}", what, list->dump());
     if (!list->empty()) return bop::GetInt((*list)[0], "obj_id", what);
   }
@@ -287,32 +301,28 @@ int FirstObjectId(const std::string& gt_file) {
 }
 
 // Every obj_id of a scene_gt.json.
-std::set<int> ObjectIds(const std::string& gt_file) {
-  const json gt = bop::ReadJsonFile(gt_file);
-  UNSEEN_CHECK(gt.is_object(), "{}: expected a JSON object keyed by frame id", gt_file);
+std::set<int> ObjectIds(const GroundTruthFile& gt) {
   std::set<int> ids;
-  for (const auto& [key, list] : gt.items()) {
-    const std::string what = fmt::format("{} frame {}", gt_file, key);
+  for (const auto& [key, list] : gt.doc.items()) {
+    const std::string what = fmt::format("{} frame {}", gt.path, key);
     UNSEEN_CHECK(list.is_array(), "{}: expected a list of objects, got {}", what, list.dump());
     for (const json& entry : list) ids.insert(bop::GetInt(entry, "obj_id", what));
   }
   return ids;
 }
 
-// Reads scene_gt.json of `source` for object `obj_id` (entries of other objects are only
-// checked for an integer obj_id). Frame ids must be frames of scene_camera.json.
-void ReadGroundTruth(int obj_id, const std::vector<int>& frame_ids, CameraSource* source) {
-  const std::string gt_file = (fs::path(source->dir) / "scene_gt.json").string();
-  if (!Exists(gt_file)) return;
-  const json gt = bop::ReadJsonFile(gt_file);
-  UNSEEN_CHECK(gt.is_object(), "{}: expected a JSON object keyed by frame id", gt_file);
+// The poses of object `obj_id` in `gt`, the scene_gt.json of `source` (entries of other
+// objects are only checked for an integer obj_id). Frame ids must be frames of
+// scene_camera.json.
+void ReadGroundTruth(const GroundTruthFile& gt, int obj_id, const std::vector<int>& frame_ids,
+                     CameraSource* source) {
   std::map<int, int> index_of;
   for (size_t i = 0; i < frame_ids.size(); ++i) index_of[frame_ids[i]] = static_cast<int>(i);
   source->cam_from_obj.assign(frame_ids.size(), std::nullopt);
-  for (const auto& [key, list] : gt.items()) {
-    const int id = bop::ParseFrameId(key, gt_file);
-    const std::string what = fmt::format("{} frame {}", gt_file, id);
-    UNSEEN_CHECK(index_of.count(id), "{}: frame {} is not in scene_camera.json", gt_file, id);
+  for (const auto& [key, list] : gt.doc.items()) {
+    const int id = bop::ParseFrameId(key, gt.path);
+    const std::string what = fmt::format("{} frame {}", gt.path, id);
+    UNSEEN_CHECK(index_of.count(id), "{}: frame {} is not in scene_camera.json", gt.path, id);
     UNSEEN_CHECK(list.is_array(), "{}: expected a list of objects, got {}", what, list.dump());
     for (const json& entry : list) {
       if (bop::GetInt(entry, "obj_id", what) != obj_id) continue;
@@ -323,7 +333,7 @@ void ReadGroundTruth(int obj_id, const std::vector<int>& frame_ids, CameraSource
   source->has_gt = true;
   if (std::none_of(source->cam_from_obj.begin(), source->cam_from_obj.end(),
                    [](const std::optional<Rigid3d>& p) { return p.has_value(); })) {
-    UNSEEN_LOG_WARN("{}: no frame has object {}; camera {} has no ground truth for it", gt_file,
+    UNSEEN_LOG_WARN("{}: no frame has object {}; camera {} has no ground truth for it", gt.path,
                     obj_id, source->name);
   }
 }
@@ -506,15 +516,16 @@ Sequence Sequence::Open(const std::string& path, int obj_id) {
 
   // Object id: sequence.json's, else the first object in the ground truth; the caller's
   // when given (then sequence.json's model, another object's, is not used).
+  std::vector<std::optional<GroundTruthFile>> gt_files;
+  for (const fs::path& dir : dirs) gt_files.push_back(LoadGroundTruthFile(dir));
   if (declared_obj_id) {
     impl->obj_id = *declared_obj_id;
   } else {
     std::vector<size_t> order = {static_cast<size_t>(impl->reference_source)};
     for (size_t i = 0; i < names.size(); ++i) order.push_back(i);
     for (size_t i : order) {
-      const fs::path gt = dirs[i] / "scene_gt.json";
-      if (Exists(gt)) {
-        impl->obj_id = FirstObjectId(gt.string());
+      if (gt_files[i]) {
+        impl->obj_id = FirstObjectId(*gt_files[i]);
         if (impl->obj_id != 0) break;
       }
     }
@@ -522,11 +533,10 @@ Sequence Sequence::Open(const std::string& path, int obj_id) {
   if (obj_id > 0 && obj_id != impl->obj_id) {
     std::set<int> present;
     bool any_gt = false;
-    for (const fs::path& dir : dirs) {
-      const fs::path gt = dir / "scene_gt.json";
-      if (!Exists(gt)) continue;
+    for (const std::optional<GroundTruthFile>& gt : gt_files) {
+      if (!gt) continue;
       any_gt = true;
-      const std::set<int> ids = ObjectIds(gt.string());
+      const std::set<int> ids = ObjectIds(*gt);
       present.insert(ids.begin(), ids.end());
     }
     UNSEEN_CHECK(!any_gt || present.count(obj_id),
@@ -535,8 +545,9 @@ Sequence Sequence::Open(const std::string& path, int obj_id) {
     impl->obj_id = obj_id;
     impl->model_path.clear();
   }
-  for (CameraSource& source : impl->sources) {
-    ReadGroundTruth(impl->obj_id, impl->frame_ids, &source);
+  for (size_t i = 0; i < impl->sources.size(); ++i) {
+    if (!gt_files[i]) continue;
+    ReadGroundTruth(*gt_files[i], impl->obj_id, impl->frame_ids, &impl->sources[i]);
   }
   if (impl->model_path.empty()) {
     std::vector<fs::path> model_dirs = {root / "models"};
