@@ -13,6 +13,7 @@
 namespace unseen {
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
 // [w]x, the cross-product matrix: Skew(w) * v == w.cross(v).
 Eigen::Matrix3d Skew(const Eigen::Vector3d& w);

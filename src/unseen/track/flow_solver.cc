@@ -12,7 +12,6 @@
 namespace unseen {
 namespace {
 
-using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
 // Weighted normal equations of one camera, camera frame.
 void Accumulate(const FlowEquations& eq, const std::vector<float>* weights, Matrix6d* h,
@@ -220,6 +219,7 @@ FlowSolution SolveJoint(const std::vector<const ModalityEquations*>& modalities,
     const Vector6d x = ldlt.solve(g);
     if (!x.allFinite()) break;
     twist = x;
+    out.information = damped;
     out.min_eigenvalue = Eigen::SelfAdjointEigenSolver<Matrix6d>(h, Eigen::EigenvaluesOnly)
                              .eigenvalues()(0);
 

@@ -104,6 +104,9 @@ struct FlowSolution {
   double final_rms_px = 0.0;
   double robust_scale_px = 0.0;
   double min_eigenvalue = 0.0;  // smallest eigenvalue of the normal matrix (conditioning)
+  // The (damped) normal matrix of the last solve, each modality's rows weighed by
+  // weight / noise^2: the twist's information; zero when the solve failed.
+  Matrix6d information = Matrix6d::Zero();
   std::vector<ModalityStats> modalities;  // in the order given
 };
 

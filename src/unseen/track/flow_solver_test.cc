@@ -155,6 +155,46 @@ TEST(FlowSolver, ModalitiesAreWeighedByTheirNoise) {
   EXPECT_FALSE(SolveJoint({&empty}, options).ok);
 }
 
+TEST(FlowSolver, TheUpdatesChiSquareIsAboutSixOnNoiseAloneAndLargeForARealMotion) {
+  // The update's squared length under the information matrix (what the tracker's coarse
+  // levels stop on): for equations of no motion whose right-hand sides are noise alone it
+  // is chi-square with 6 degrees of freedom (mean 6); for a real motion it is far larger.
+  std::mt19937 rng(17);
+  std::normal_distribution<float> noise(0.0f, 1e-3f);
+  FlowSolverOptions options;
+  options.damping = 0.0;
+  double sum = 0.0;
+  const int trials = 200;
+  for (int t = 0; t < trials; ++t) {
+    ModalityEquations m;
+    m.model.kernel = RobustKernel::kNone;
+    m.model.min_noise = 1e-6;
+    m.cameras = {MakeEquations(Camera(), Rigid3d(), Eigen::Vector3d(0, 0, 1), Vector6d::Zero(),
+                               300, 0, &rng)};
+    for (float& b : m.cameras[0].rhs) b += noise(rng);
+    const FlowSolution s = SolveJoint({&m}, options);
+    ASSERT_TRUE(s.ok);
+    sum += s.twist.dot(s.information * s.twist);
+  }
+  const double mean = sum / trials;
+  EXPECT_GT(mean, 4.5);
+  EXPECT_LT(mean, 7.5);
+
+  Vector6d motion;
+  motion << 0.002, 0.001, -0.003, 0.01, 0.0, -0.02;
+  ModalityEquations m;
+  m.model.kernel = RobustKernel::kNone;
+  m.model.min_noise = 1e-6;
+  m.cameras = {MakeEquations(Camera(), Rigid3d(), Eigen::Vector3d(0, 0, 1), motion, 300, 0, &rng)};
+  for (float& b : m.cameras[0].rhs) b += noise(rng);
+  const FlowSolution s = SolveJoint({&m}, options);
+  ASSERT_TRUE(s.ok);
+  EXPECT_GT(s.twist.dot(s.information * s.twist), 10.0 * mean);
+  // A failed solve has no information.
+  ModalityEquations empty;
+  EXPECT_EQ(SolveJoint({&empty}, options).information, Matrix6d::Zero());
+}
+
 TEST(FlowSolver, AModalitysDampingShortensItsOwnStepOnly) {
   // Exact equations: undamped, the solve finds the twist; a modality's damping shortens
   // the step while it is alone, and much less next to a modality that determines the

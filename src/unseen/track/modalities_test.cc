@@ -4,9 +4,11 @@
 // alone on an untextured model, the photometric modality switched off for a model without
 // appearance, and a confidence that depth and silhouette keep honest.
 #include <cmath>
+#include <filesystem>
 
 #include <gtest/gtest.h>
 
+#include "unseen/io/sequence.h"
 #include "unseen/mesh/primitives.h"
 #include "unseen/render/rasterizer.h"
 #include "unseen/track/depth_modality.h"
@@ -14,6 +16,7 @@
 #include "unseen/track/test_scene.h"
 #include "unseen/track/tracker.h"
 #include "unseen/util/error.h"
+#include "unseen/util/testing.h"
 
 namespace unseen {
 namespace {
@@ -169,6 +172,44 @@ TEST_F(ModalityScene, RegionAloneTracksAnUntexturedModel) {
   EXPECT_LT(e.rotation_rad, 1.0 * kDeg) << r.BriefReport();
   EXPECT_GT(r.summary.region_counts.used, 50) << r.BriefReport();
   EXPECT_GT(r.confidence, 0.5) << r.BriefReport();
+}
+
+TEST(SilhouetteNoise, AnUntexturedFiguresCoarseLevelsStopAtTheirNoise) {
+  // PyramidOptions::noise_stop_chi2: a tracked frame's coarse level whose update is within
+  // the solve's own noise is done. The untextured glossy figure of the development
+  // sequences is tracked by its silhouette, whose rows hold some turns weakly: the coarse
+  // levels' solves move the pose by noise round after round there. Stopping on it costs
+  // fewer renders and no accuracy (the finest level still runs to its own stop). Measured:
+  // 3.85 -> 3.30 renders a frame, 3.28 mm both, 1.19 -> 1.01 deg.
+  const std::string path = testing::DevSequencesDir() + "wuson_handheld_pointlight";
+  if (!std::filesystem::is_directory(path)) GTEST_SKIP() << path << " not found";
+  const Sequence sequence = Sequence::Open(path);
+  const Mesh model = sequence.LoadModel();
+  auto track = [&](double noise_stop_chi2, int* renders, double* mean_mm, double* mean_deg) {
+    TrackerOptions options;
+    options.threads = 1;
+    options.frame_interval_s = 1.0 / sequence.fps();
+    options.pyramid.noise_stop_chi2 = noise_stop_chi2;
+    Tracker tracker(sequence.rig(), model, options);
+    tracker.Initialize(*sequence.GroundTruth(0));
+    *renders = 0;
+    *mean_mm = *mean_deg = 0.0;
+    for (int k = 0; k < sequence.num_frames(); ++k) {
+      const TrackResult r = tracker.Track(sequence.ReadFrame(k));
+      EXPECT_EQ(r.status, TrackStatus::kTracking) << k << ": " << r.BriefReport();
+      *renders += r.summary.renders;
+      const PoseDifference e = Difference(r.world_from_obj, *sequence.GroundTruth(k));
+      *mean_mm += 1e3 * e.translation / sequence.num_frames();
+      *mean_deg += e.rotation_rad / kDeg / sequence.num_frames();
+    }
+  };
+  int renders_off = 0, renders_on = 0;
+  double mm_off = 0.0, mm_on = 0.0, deg_off = 0.0, deg_on = 0.0;
+  track(0.0, &renders_off, &mm_off, &deg_off);
+  track(6.0, &renders_on, &mm_on, &deg_on);
+  EXPECT_LT(renders_on, 0.92 * renders_off);
+  EXPECT_LT(mm_on, 1.1 * mm_off);
+  EXPECT_LT(deg_on, 1.1 * deg_off);
 }
 
 TEST_F(ModalityScene, AModelWhoseColoursDisagreeTracksByItsSilhouette) {

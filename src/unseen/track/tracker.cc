@@ -622,7 +622,12 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
                        twist(4), twist(5));
       ++s.iterations_per_level[level];
       if (level == finest) s.last_update_px = update_px;
-      if (update_px < min_update_px) {
+      // Done when the update is small; a tracked frame's coarse level, which only has to
+      // bring the pose within the next level's reach, also when the update is no larger
+      // than the solve's own noise would make it (PyramidOptions::noise_stop_chi2).
+      const double update_chi2 = solution.twist.dot(solution.information * solution.twist);
+      if (update_px < min_update_px || (span.tracking && level != full_resolution &&
+                                        update_chi2 < po.noise_stop_chi2)) {
         s.times.solve_ms += timer.ElapsedMilliseconds();
         break;
       }

@@ -183,10 +183,16 @@ class Tracker {
     int num_levels = 0;      // levels from `finest` up; 0: NumLevelsFor the start pose
     int max_iterations = 0;  // rounds per level at most; 0: PyramidOptions' limits
     bool scoring = false;    // AlignLevels: no learning, confidence without references
+    // A frame's alignment from the predicted pose: its coarse levels may also stop at
+    // their noise (PyramidOptions::noise_stop_chi2); a search's alignments, which may start
+    // far off, run theirs.
+    bool tracking = false;
   };
-  TrackResult AlignChecked(const Frame& frame, const Rigid3d& start, int num_levels) {
+  TrackResult AlignChecked(const Frame& frame, const Rigid3d& start, int num_levels,
+                           bool tracking = false) {
     LevelSpan span;
     span.num_levels = num_levels;
+    span.tracking = tracking;
     return AlignChecked(frame, start, span);
   }
   TrackResult AlignChecked(const Frame& frame, const Rigid3d& start, const LevelSpan& span);

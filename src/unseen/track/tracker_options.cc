@@ -28,6 +28,8 @@ void PyramidOptions::Check() const {
   UNSEEN_CHECK(
       photometric_coarse_min_update_px >= 0.0 && std::isfinite(photometric_coarse_min_update_px),
       "pyramid.photometric_coarse_min_update_px {} must be >= 0", photometric_coarse_min_update_px);
+  UNSEEN_CHECK(noise_stop_chi2 >= 0.0 && std::isfinite(noise_stop_chi2),
+               "pyramid.noise_stop_chi2 {} must be >= 0", noise_stop_chi2);
   UNSEEN_CHECK(max_step_px > 0.0 && std::isfinite(max_step_px),
                "pyramid.max_step_px {} must be > 0", max_step_px);
   UNSEEN_CHECK(resample_iterations >= 0 && resample_iterations <= 100,
@@ -234,6 +236,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"coarse_max_iterations", YamlField(&py.coarse_max_iterations)},
         {"coarse_min_update_px", YamlField(&py.coarse_min_update_px)},
         {"photometric_coarse_min_update_px", YamlField(&py.photometric_coarse_min_update_px)},
+        {"noise_stop_chi2", YamlField(&py.noise_stop_chi2)},
         {"max_step_px", YamlField(&py.max_step_px)},
         {"resample_iterations", YamlField(&py.resample_iterations)},
         {"rerender_px", YamlField(&py.rerender_px)},

@@ -30,7 +30,7 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
       "solver: {kernel: tukey, kernel_width: 4.685}\n"
       "pyramid: {max_levels: 2, adaptive_levels: false, min_adaptive_levels: 1, capture_px: 3,\n"
       "          photometric_coarse_min_update_px: 0.5, max_finest_px: 40000,\n"
-      "          finest_hysteresis: 0.5}\n"
+      "          finest_hysteresis: 0.5, noise_stop_chi2: 0}\n"
       "predictor: {type: none, min_confidence: 0.4, confidence_power: 2}\n"
       "failure: {lost_after_frames: 5, good_used_px: 3000, bad_residual_ratio: 2.0}\n"
       "frame_interval_s: 0.04\n"
@@ -48,6 +48,7 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
   EXPECT_DOUBLE_EQ(o.pyramid.photometric_coarse_min_update_px, 0.5);
   EXPECT_DOUBLE_EQ(o.pyramid.max_finest_px, 40000.0);
   EXPECT_DOUBLE_EQ(o.pyramid.finest_hysteresis, 0.5);
+  EXPECT_DOUBLE_EQ(o.pyramid.noise_stop_chi2, 0.0);
   EXPECT_DOUBLE_EQ(o.pyramid.coarse_min_update_px, 0.3);  // untouched default
   EXPECT_EQ(o.predictor.type, PredictorType::kHold);
   EXPECT_DOUBLE_EQ(o.predictor.min_confidence, 0.4);
@@ -137,6 +138,8 @@ TEST(TrackerOptions, RejectsBadFilesNamingTheKey) {
   EXPECT_NE(message("pyramid: {max_finest_px: 100}").find("pyramid.max_finest_px"),
             std::string::npos);
   EXPECT_NE(message("pyramid: {finest_hysteresis: 0}").find("pyramid.finest_hysteresis"),
+            std::string::npos);
+  EXPECT_NE(message("pyramid: {noise_stop_chi2: -1}").find("pyramid.noise_stop_chi2"),
             std::string::npos);
   EXPECT_NE(message("pyramid: {photometric_coarse_min_update_px: -1}")
                 .find("pyramid.photometric_coarse_min_update_px"),

@@ -25,10 +25,10 @@ TrackResult Tracker::AlignPredicted(const Frame& frame, const Rigid3d& predicted
     levels = std::min(full, po.min_adaptive_levels);
     while (levels < full && expected_px > po.capture_px * double(1 << (levels - 1))) ++levels;
   }
-  TrackResult r = AlignChecked(frame, predicted, levels);
+  TrackResult r = AlignChecked(frame, predicted, levels, /*tracking=*/true);
   const double reach_px = po.capture_px * double(1 << (levels - 1));
   if (levels < full && (r.confidence < trust || r.summary.correction_px > 0.75 * reach_px)) {
-    TrackResult with_all = AlignChecked(frame, predicted, full);
+    TrackResult with_all = AlignChecked(frame, predicted, full, /*tracking=*/true);
     StageTimes both = r.summary.times;  // both alignments were paid for
     both += with_all.summary.times;
     if (with_all.confidence >= r.confidence) r = std::move(with_all);
