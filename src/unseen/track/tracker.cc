@@ -480,6 +480,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
     const double min_update_px = level == full_resolution ? po.min_update_px
                                  : texture_leads ? po.photometric_coarse_min_update_px
                                                  : po.coarse_min_update_px;
+    Vector6d previous_update = Vector6d::Zero();  // the level's previous solve
     for (int iteration = 0; iteration < max_iterations; ++iteration) {
       ++s.renders;
       const Rigid3d round_pose = pose;
@@ -623,11 +624,16 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
       ++s.iterations_per_level[level];
       if (level == finest) s.last_update_px = update_px;
       // Done when the update is small; a tracked frame's coarse level, which only has to
-      // bring the pose within the next level's reach, also when the update is no larger
-      // than the solve's own noise would make it (PyramidOptions::noise_stop_chi2).
-      const double update_chi2 = solution.twist.dot(solution.information * solution.twist);
-      if (update_px < min_update_px || (span.tracking && level != full_resolution &&
-                                        update_chi2 < po.noise_stop_chi2)) {
+      // bring the pose within the next level's reach, also when the solves swing about
+      // their optimum: the update turns back on the previous one and is no larger than the
+      // solve's own noise would make it (PyramidOptions::noise_stop_chi2), both measured
+      // with the normal matrix.
+      const Vector6d& update = solution.twist;
+      const Vector6d information_update = solution.information * update;
+      const bool swings = iteration > 0 && previous_update.dot(information_update) < 0.0 &&
+                          update.dot(information_update) < po.noise_stop_chi2;
+      previous_update = update;
+      if (update_px < min_update_px || (span.tracking && level != full_resolution && swings)) {
         s.times.solve_ms += timer.ElapsedMilliseconds();
         break;
       }

@@ -55,21 +55,23 @@ struct PyramidOptions {
   // slowly at the coarse levels and need the stricter stop (untextured teapot 100 % at
   // 0.3, 67-82 % at 0.5-1.2).
   double photometric_coarse_min_update_px = 1.0;
-  // A tracked frame's coarse level is also done when its update is within the solve's own
-  // noise: the update's squared length under the normal matrix (FlowSolution::
-  // information), chi-square distributed with 6 degrees of freedom for an update of noise
-  // alone, below this (6: that distribution's mean; 0: off). A texture's thousands of rows
-  // make every update they still give significant (tens to thousands); a silhouette's few
-  // hundred leave a weakly held direction in which the solves swing by a pixel round after
-  // round. The finest level still runs to min_update_px (stopping it at the noise too cost
+  // A tracked frame's coarse level is also done when its solves swing about their optimum:
+  // the update turns back on the previous one (negative inner product under the normal
+  // matrix, FlowSolution::information) and its squared length under that matrix, which is
+  // chi-square distributed with 6 degrees of freedom for an update of noise alone, is below
+  // this (6: that distribution's mean; 0: off). A texture's thousands of rows make every
+  // update they still give significant (tens to thousands); a silhouette's few hundred leave
+  // a weakly held direction in which the solves swung by a pixel for all six rounds of a
+  // level. The finest level still runs to min_update_px (stopping it at the noise too cost
   // the untextured CAD engine and rock 10-20 % of rotation accuracy), and a search's
-  // alignments run their rounds (the untextured figure was not found after a blackout).
-  // Measured (--init gt, one thread), renders a frame and mean error: untextured figure
-  // behind an occluder 13.5 -> 7.9, 32.5 -> 35 % within 5 cm/5 deg, 25.0 -> 18.8 mm;
-  // untextured glossy figure 3.85 -> 3.30, 1.19 -> 1.01 deg (within 2 cm/2 deg 84 -> 95 %);
-  // glossy duck 3.57 -> 3.35, 3.79 -> 4.03 mm; CAD engine 3.98 -> 3.71, 7.67 -> 7.53 mm;
-  // the box under a moving light (silhouette-led once the light demotes its texture)
-  // 2.69 -> 2.53, 6.01 -> 5.32 mm, 0.75 -> 0.86 deg; the other 12 sequences identical.
+  // alignments run their rounds (the untextured figure was no longer found after a
+  // blackout). Without the turn-back condition, a noisy update that still pointed the
+  // right way also stopped: the real cube by its silhouette alone lost 6 frames. Measured
+  // (--init gt, one thread), rounds a frame and mean error: untextured figure behind an
+  // occluder 13.5 -> 3.3 rounds, 32.5 -> 45 % within 5 cm/5 deg, 12 -> 0 frames lost, 25.0
+  // -> 1.4 mm; untextured glossy figure 3.85 -> 3.61, 1.19 -> 1.13 deg, 3.28 -> 3.48 mm;
+  // glossy duck 3.57 -> 3.35, 3.79 -> 4.03 mm; CAD engine 3.98 -> 3.93; textured sequences
+  // identical.
   double noise_stop_chi2 = 6.0;
   double max_step_px = 4.0;       // one update moves the object at most this far, level px
   // At the finest level, after a round's solve, up to this many solves of the same rows
