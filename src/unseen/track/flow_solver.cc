@@ -282,4 +282,11 @@ FlowSolution SolveFlow(const std::vector<FlowEquations>& cameras,
   return SolveJoint({&photometric}, options);
 }
 
+bool SwingsWithinNoise(const Vector6d& previous_update, const Vector6d& update,
+                       const Matrix6d& information, double max_chi2) {
+  const Vector6d information_update = information * update;
+  return previous_update.dot(information_update) < 0.0 &&
+         update.dot(information_update) < max_chi2;
+}
+
 }  // namespace unseen

@@ -124,4 +124,12 @@ FlowSolution SolveFlow(const std::vector<FlowEquations>& cameras, const FlowSolv
 FlowSolution SolveJoint(const std::vector<const ModalityEquations*>& modalities,
                         const FlowSolverOptions& options);
 
+// Whether successive Gauss-Newton updates swing about the optimum within the solve's noise:
+// `update` turns back on `previous_update` (negative inner product under `information`, the
+// normal matrix the update was solved with) and its squared length under that matrix,
+// chi-square with 6 degrees of freedom for an update of noise alone, is below `max_chi2`.
+// A zero previous update (the first round) never swings.
+bool SwingsWithinNoise(const Vector6d& previous_update, const Vector6d& update,
+                       const Matrix6d& information, double max_chi2);
+
 }  // namespace unseen

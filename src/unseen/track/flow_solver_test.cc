@@ -195,6 +195,31 @@ TEST(FlowSolver, TheUpdatesChiSquareIsAboutSixOnNoiseAloneAndLargeForARealMotion
   EXPECT_EQ(SolveJoint({&empty}, options).information, Matrix6d::Zero());
 }
 
+TEST(FlowSolver, SwingsWithinNoiseOnlyWhenASmallUpdateTurnsBack) {
+  // Information of 1e4 per unit twist: an update of 0.01 along an axis has chi-square 1.
+  const Matrix6d information = 1e4 * Matrix6d::Identity();
+  Vector6d forward = Vector6d::Zero(), back = Vector6d::Zero(), aside = Vector6d::Zero();
+  forward(3) = 0.01;
+  back(3) = -0.01;
+  aside(4) = 0.01;
+  EXPECT_TRUE(SwingsWithinNoise(forward, back, information, 6.0));
+  EXPECT_FALSE(SwingsWithinNoise(forward, forward, information, 6.0));  // still going on
+  EXPECT_FALSE(SwingsWithinNoise(forward, aside, information, 6.0));    // not back
+  EXPECT_FALSE(SwingsWithinNoise(Vector6d::Zero(), back, information, 6.0));  // first round
+  EXPECT_FALSE(SwingsWithinNoise(forward, 3.0 * back, information, 6.0));  // chi-square 9
+  EXPECT_TRUE(SwingsWithinNoise(forward, 3.0 * back, information, 10.0));
+  EXPECT_FALSE(SwingsWithinNoise(forward, back, information, 0.0));  // off
+  // The metric is the information's: a turn back in a direction it barely holds counts
+  // even when the Euclidean inner product says otherwise.
+  Matrix6d skewed = information;
+  skewed(3, 3) = 1e6;
+  Vector6d mostly_aside = aside;
+  mostly_aside(3) = -0.001;  // back along the well-held axis, a little
+  const Vector6d previous = forward + 2.0 * aside;  // Euclidean: mostly_aside goes on with it
+  ASSERT_GT(previous.dot(mostly_aside), 0.0);
+  EXPECT_TRUE(SwingsWithinNoise(previous, mostly_aside, skewed, 6.0));
+}
+
 TEST(FlowSolver, AModalitysDampingShortensItsOwnStepOnly) {
   // Exact equations: undamped, the solve finds the twist; a modality's damping shortens
   // the step while it is alone, and much less next to a modality that determines the

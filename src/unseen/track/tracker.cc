@@ -628,12 +628,12 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
       // their optimum: the update turns back on the previous one and is no larger than the
       // solve's own noise would make it (PyramidOptions::noise_stop_chi2), both measured
       // with the normal matrix.
-      const Vector6d& update = solution.twist;
-      const Vector6d information_update = solution.information * update;
-      const bool swings = iteration > 0 && previous_update.dot(information_update) < 0.0 &&
-                          update.dot(information_update) < po.noise_stop_chi2;
-      previous_update = update;
-      if (update_px < min_update_px || (span.tracking && level != full_resolution && swings)) {
+      const bool swings = span.tracking && level != full_resolution &&
+                          SwingsWithinNoise(previous_update, solution.twist, solution.information,
+                                            po.noise_stop_chi2);
+      previous_update = solution.twist;
+      if (swings && update_px >= min_update_px) ++s.noise_stops;
+      if (update_px < min_update_px || swings) {
         s.times.solve_ms += timer.ElapsedMilliseconds();
         break;
       }

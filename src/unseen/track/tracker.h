@@ -55,6 +55,7 @@ struct SolveSummary {
   std::vector<int> iterations_per_level;  // solves; index = level (0 = full resolution;
                                           // 0 solves below AlignLevels' finest level)
   int renders = 0;                       // render-solve rounds over all levels
+  int noise_stops = 0;  // coarse levels ended by their swing (PyramidOptions::noise_stop_chi2)
   int resamples = 0;                     // solves that re-measured a round's rows instead
   // The object's rendered area in the finest level's last round, all cameras, level-0 px.
   double object_px = 0.0;
