@@ -59,20 +59,21 @@ struct PyramidOptions {
   // the update turns back on the previous one (negative inner product under the normal
   // matrix, FlowSolution::information) and its squared length under that matrix, which is
   // chi-square distributed with 6 degrees of freedom for an update of noise alone, is below
-  // this (6: that distribution's mean; 0: off). A texture's thousands of rows make every
-  // update they still give significant (tens to thousands); a silhouette's few hundred leave
-  // a weakly held direction in which the solves swung by a pixel for all six rounds of a
-  // level. The finest level still runs to min_update_px (stopping it at the noise too cost
-  // the untextured CAD engine and rock 10-20 % of rotation accuracy), and a search's
-  // alignments run their rounds (the untextured figure was no longer found after a
-  // blackout). Without the turn-back condition, a noisy update that still pointed the
-  // right way also stopped: the real cube by its silhouette alone lost 6 frames. Measured
-  // (--init gt, one thread), rounds a frame and mean error: untextured figure behind an
-  // occluder 13.5 -> 3.3 rounds, 32.5 -> 45 % within 5 cm/5 deg, 12 -> 0 frames lost, 25.0
-  // -> 1.4 mm; untextured glossy figure 3.85 -> 3.61, 1.19 -> 1.13 deg, 3.28 -> 3.48 mm;
-  // glossy duck 3.57 -> 3.35, 3.79 -> 4.03 mm; CAD engine 3.98 -> 3.93; textured sequences
-  // identical.
-  double noise_stop_chi2 = 6.0;
+  // this (3: smaller than 81 % of noise-alone updates; 0: off). A texture's thousands of
+  // rows make every update they still give significant (tens to thousands); a silhouette's
+  // few hundred leave a weakly held direction in which the solves swung by a pixel for all
+  // six rounds of a level. The finest level still runs to min_update_px (stopping it at the
+  // noise too cost the untextured CAD engine and rock 10-20 % of rotation accuracy), and a
+  // search's alignments run their rounds (the untextured figure was no longer found after a
+  // blackout). Without the turn-back condition a noisy update still pointing the right way
+  // stopped too (the real cube by its silhouette alone lost 6 frames); at 6 (the
+  // distribution's mean) the untextured teapot's slow turn drifted past 5 deg (100 -> 90 %).
+  // Measured (--init gt, one thread), rounds a frame: untextured figure behind an occluder
+  // 13.5 -> 3.3, 32.5 -> 45 % within 5 cm/5 deg, 12 -> 0 frames lost, 25.0 -> 1.4 mm;
+  // untextured glossy figure 3.85 -> 3.76, within 2 cm/2 deg 84 -> 89 %, 1.19 -> 1.10 deg;
+  // untextured teapot 6.98 -> 6.03, 2 cm/2 deg 52 -> 62 %, 1.71 -> 1.84 mm, 2.21 -> 2.13 deg;
+  // 14 other sequences identical.
+  double noise_stop_chi2 = 3.0;
   double max_step_px = 4.0;       // one update moves the object at most this far, level px
   // At the finest level, after a round's solve, up to this many solves of the same rows
   // re-measured at the moved pose (Modality::MoveBy: the photometric modality samples the
