@@ -185,6 +185,7 @@ FlowSolution SolveJoint(const std::vector<const ModalityEquations*>& modalities,
   }
 
   Vector6d twist = Vector6d::Zero();
+  Matrix6d information = Matrix6d::Zero();  // the normal matrix `twist` was solved with
   const int solves = 1 + (robust ? options.irls_iterations : 0);
   for (int pass = 0; pass < solves; ++pass) {
     Matrix6d h = Matrix6d::Zero();
@@ -219,7 +220,7 @@ FlowSolution SolveJoint(const std::vector<const ModalityEquations*>& modalities,
     const Vector6d x = ldlt.solve(g);
     if (!x.allFinite()) break;
     twist = x;
-    out.information = damped;
+    information = damped;
     out.min_eigenvalue = Eigen::SelfAdjointEigenSolver<Matrix6d>(h, Eigen::EigenvaluesOnly)
                              .eigenvalues()(0);
 
@@ -267,7 +268,10 @@ FlowSolution SolveJoint(const std::vector<const ModalityEquations*>& modalities,
   }
   for (ModalityWork& mw : work) mw.stats.noise = mw.noise;
   finish_stats();
-  if (out.ok) out.twist = twist;
+  if (out.ok) {
+    out.twist = twist;
+    out.information = information;
+  }
   return out;
 }
 

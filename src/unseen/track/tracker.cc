@@ -625,9 +625,9 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
       if (level == finest) s.last_update_px = update_px;
       // Done when the update is small; a tracked frame's coarse level, which only has to
       // bring the pose within the next level's reach, also when the solves swing about
-      // their optimum: the update turns back on the previous one and is no larger than the
-      // solve's own noise would make it (PyramidOptions::noise_stop_chi2), both measured
-      // with the normal matrix.
+      // their optimum: the update turns back on the previous one and is smaller than the
+      // solve's own noise would typically make it (PyramidOptions::noise_stop_chi2), both
+      // measured with the normal matrix.
       const bool swings = span.tracking && level != full_resolution &&
                           SwingsWithinNoise(previous_update, solution.twist, solution.information,
                                             po.noise_stop_chi2);
