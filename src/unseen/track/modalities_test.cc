@@ -396,6 +396,65 @@ TEST(RegionModality, HistogramsLearnAndJudgeColours) {
   EXPECT_FALSE(h.learnt());
 }
 
+// A square red object on grey; an occluder coloured like the background covers the square's
+// right edge. Its lines see background where the object should be and pull the contour in by
+// several standard deviations; with the occluder's blocks marked (as the photometric
+// selection marks them) they are left out and the rest sit on the contour.
+TEST(RegionModality, LinesAcrossAnOccluderAreLeftOut) {
+  const int size = 96, block = 8;
+  const cv::Vec3f grey(0.6f, 0.6f, 0.6f), red(0.1f, 0.1f, 0.9f);
+  cv::Mat image(size, size, CV_32FC3, grey);
+  cv::Mat mask = cv::Mat::zeros(size, size, CV_8UC1);
+  const cv::Rect square(24, 24, 48, 48);
+  image(square).setTo(red);
+  mask(square).setTo(255);
+  const cv::Rect occluder(56, 16, 32, 64);  // over the square's right edge (x = 71)
+  image(occluder).setTo(cv::Vec3f(0.62f, 0.58f, 0.6f));
+  cv::Mat depth(size, size, CV_32FC1, cv::Scalar(0.0f));
+  depth.setTo(1.0f, mask);
+  cv::Mat occluded = cv::Mat::zeros(size / block, size / block, CV_8UC1);
+  occluded(cv::Rect(occluder.x / block, occluder.y / block, occluder.width / block,
+                    occluder.height / block))
+      .setTo(255);
+
+  RegionModalityOptions options;
+  ColorHistograms histograms(options.bins_per_channel);
+  RegionModalityInput in;
+  in.image = &image;
+  in.mask = &mask;
+  in.rendered_depth = &depth;
+  in.roi = PixelRect{0, 0, size, size};
+  in.camera = PinholeCamera::Centered(size, size, 100.0);
+  in.origin_in_cam = Eigen::Vector3d(0.0, 0.0, 1.0);
+  FlowEquations ignored;
+  RegionCounts learnt;
+  AddRegionEquations(in, options, /*learn=*/true, &histograms, &ignored, &learnt);
+  histograms.Commit(1.0);
+  ASSERT_TRUE(histograms.learnt());
+
+  auto largest_offset = [&](bool mark, RegionCounts* counts) {
+    in.occluded_blocks = mark ? &occluded : nullptr;
+    in.occluded_block_px = mark ? block : 0;
+    FlowEquations rows;
+    AddRegionEquations(in, options, /*learn=*/false, &histograms, &rows, counts);
+    float largest = 0.0f;
+    for (float b : rows.rhs) largest = std::max(largest, std::abs(b));
+    return largest;
+  };
+  RegionCounts unmarked, marked;
+  EXPECT_GT(largest_offset(false, &unmarked), 3.0f);
+  EXPECT_EQ(unmarked.occluded, 0);
+  EXPECT_LT(largest_offset(true, &marked), 1.5f);
+  EXPECT_GT(marked.occluded, 0);
+  EXPECT_EQ(marked.lines + marked.occluded, unmarked.lines);
+  EXPECT_GT(marked.Agreement(), unmarked.Agreement());
+  // Switched off, the marks are ignored.
+  options.skip_occluded_lines = false;
+  RegionCounts off;
+  EXPECT_GT(largest_offset(true, &off), 3.0f);
+  EXPECT_EQ(off.occluded, 0);
+}
+
 TEST(ModalityOptions, CheckRejectsNonsense) {
   DepthModalityOptions depth;
   EXPECT_NO_THROW(depth.Check());
@@ -413,6 +472,9 @@ TEST(ModalityOptions, CheckRejectsNonsense) {
   EXPECT_EQ(options.depth.max_points, 100);
   EXPECT_EQ(options.region.line_px, 8);
   EXPECT_THROW(ParseTrackerOptions("region: {line_px: 0}\n"), Error);
+  EXPECT_FALSE(
+      ParseTrackerOptions("region: {skip_occluded_lines: false}\n").region.skip_occluded_lines);
+  EXPECT_THROW(ParseTrackerOptions("region: {occluded_probe_px: -1}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("depth: {colour: 1}\n"), Error);
   const TrackerOptions drag =
       ParseTrackerOptions("photometric: {start_drag_px: 5, start_drag_ratio: 3}\n");

@@ -44,6 +44,11 @@ struct ModalityRound {
   const PreprocessedImage* input_pre = nullptr;
   const cv::Mat* photometric_region = nullptr;
   const cv::Mat* photometric_depth = nullptr;
+  // The blocks of this round's roi that the photometric modality found occluded (CV_8UC1,
+  // non-zero: an occluder in front of the object; PhotometricModality::occluded_blocks),
+  // occluded_block_px level pixels a side; null when it did not look.
+  const cv::Mat* occluded_blocks = nullptr;
+  int occluded_block_px = 0;
   // CV_32FC1 metres at full resolution (0: none) when the frame carries depth, else null.
   const cv::Mat* measured_depth = nullptr;
   // The statistics a modality learns may learn from this round (the tracker's choice: the

@@ -30,6 +30,11 @@ class PhotometricModality : public CountingModality<SelectionCounts> {
   // towards that pose. The round's buffers must still hold (the tracker's do until the
   // next round).
   void MoveBy(const std::vector<Vector6d>& twist_in_cam) override;
+  // Camera `camera`'s blocks of this round that the block occlusion rejection dropped
+  // (SelectPixels' `occluded_blocks`; PixelSelectionOptions::block_px level pixels a side,
+  // from the round's roi corner), or null before its AddEquations of this round.
+  const cv::Mat* occluded_blocks(int camera) const;
+  int block_px() const { return options_.block_px; }
 
  private:
   // What one camera's round needs to measure again.
@@ -37,6 +42,8 @@ class PhotometricModality : public CountingModality<SelectionCounts> {
     std::vector<PhotometricSample> samples;  // one per equation
     std::vector<uint8_t> remeasure;          // per equation: inside the margin
     cv::Mat interior;                        // the rendered mask eroded by the margin
+    cv::Mat occluded_blocks;                 // SelectPixels' dropped blocks
+    bool selected = false;                   // AddEquations ran this round
     const cv::Mat* input = nullptr;          // the pre-processed input, of the size of roi
     PixelRect roi;
     PinholeCamera camera;

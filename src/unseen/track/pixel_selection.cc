@@ -81,7 +81,7 @@ double SelectionCounts::RejectionGathering() const {
 
 void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options,
                   FlowEquations* out, SelectionCounts* counts,
-                  std::vector<PhotometricSample>* samples) {
+                  std::vector<PhotometricSample>* samples, cv::Mat* occluded_blocks) {
   const PreprocessedImage& v = *in.virtual_image;
   const PreprocessedImage& im = *in.input_image;
   const int w = in.roi.width(), h = in.roi.height();
@@ -114,6 +114,10 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
   const int first_row = out->size();
   const size_t first_sample = samples ? samples->size() : 0;
   std::vector<int> row_block;  // block of each row appended here
+  if (occluded_blocks) {
+    occluded_blocks->create(block_rows, block_cols, CV_8UC1);
+    occluded_blocks->setTo(0);
+  }
 
   for (int y = 0; y < h; ++y) {
     int* row_gradient = block_gradient.data() + (y / block) * block_cols;
@@ -326,6 +330,7 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
         drop[b] = block_gradient[b] >= options.block_min_gradient &&
                   float(block_passed[b]) < min_share * float(block_gradient[b]);
         if (drop[b]) {
+          if (occluded_blocks) occluded_blocks->data[b] = 255;
           c.rejected_block += block_used[b];
           c.used -= block_used[b];
         }

@@ -116,8 +116,12 @@ struct PhotometricSample {
 // FlowRowInCamera) and adds to `counts`; with `samples`, one PhotometricSample per
 // equation appended, in the same order. Tests are applied in the order gradient (4.8),
 // occlusion (4.13)-(4.15), directedness (3.6, redundancy mode), normal flow (4.9).
+// With `occluded_blocks`, the blocks the block occlusion rejection dropped: CV_8UC1 of
+// ceil(h / block_px) x ceil(w / block_px), non-zero where dropped (all zero when the test
+// did not run).
 void SelectPixels(const SelectionInput& input, const PixelSelectionOptions& options,
                   FlowEquations* out, SelectionCounts* counts,
-                  std::vector<PhotometricSample>* samples = nullptr);
+                  std::vector<PhotometricSample>* samples = nullptr,
+                  cv::Mat* occluded_blocks = nullptr);
 
 }  // namespace unseen

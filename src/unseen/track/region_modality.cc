@@ -26,6 +26,8 @@ void RegionModalityOptions::Check() const {
                max_sigma_px);
   UNSEEN_CHECK(min_contrast >= 0.0 && min_contrast < 1.0, "region.min_contrast {} must be in [0, 1)",
                min_contrast);
+  UNSEEN_CHECK(occluded_probe_px >= 0 && occluded_probe_px <= 64,
+               "region.occluded_probe_px {} must be in [0, 64]", occluded_probe_px);
   residual.Check("region");
   UNSEEN_CHECK(min_start_edge_share >= 0.0 && min_start_edge_share <= 1.0,
                "region.min_start_edge_share {} must be in [0, 1]", min_start_edge_share);
@@ -115,6 +117,7 @@ RegionCounts& RegionCounts::operator+=(const RegionCounts& o) {
   pixels += o.pixels;
   agreeing += o.agreeing;
   edge_lines += o.edge_lines;
+  occluded += o.occluded;
   return *this;
 }
 
@@ -189,6 +192,15 @@ void AddRegionEquations(const RegionModalityInput& in, const RegionModalityOptio
   std::vector<int> bins(samples);
   std::vector<double> log_p(samples + 1);
   RegionCounts c;
+  const cv::Mat* occluded = options.skip_occluded_lines && in.occluded_block_px > 0
+                                ? in.occluded_blocks
+                                : nullptr;
+  auto in_occluded_block = [&](float x, float y) {
+    const int bx = int(std::floor(x)) / in.occluded_block_px;
+    const int by = int(std::floor(y)) / in.occluded_block_px;
+    return x >= 0.0f && y >= 0.0f && bx < occluded->cols && by < occluded->rows &&
+           occluded->ptr<uint8_t>(by)[bx] != 0;
+  };
   for (const ContourSample& cs : SampleContour(mask, options.max_lines)) {
     // The contour lies half a pixel outside the centre of a boundary pixel whose centre is
     // covered; a partly covered one holds it, as far out as its coverage. The line runs
@@ -197,6 +209,14 @@ void AddRegionEquations(const RegionModalityInput& in, const RegionModalityOptio
     const float offset =
         in.coverage ? 0.25f * float(in.coverage->ptr<uint8_t>(cs.y)[cs.x]) - 0.5f : 0.5f;
     const float px = cs.x + offset * cs.nx, py = cs.y + offset * cs.ny;
+    if (occluded) {
+      const float probe = float(options.occluded_probe_px);
+      if (in_occluded_block(px, py) ||
+          in_occluded_block(px - probe * cs.nx, py - probe * cs.ny)) {
+        ++c.occluded;
+        continue;
+      }
+    }
     auto sample_pixel = [&](int k, int* sx, int* sy) {
       const float s = float(k - half) + 0.5f;
       *sx = int(std::lround(px + s * cs.nx));
@@ -324,6 +344,8 @@ void RegionModality::AddEquations(const ModalityRound& round) {
   in.camera = round.level_camera;
   in.origin_in_cam = round.origin_in_cam;
   in.level = round.level;
+  in.occluded_blocks = round.occluded_blocks;
+  in.occluded_block_px = round.occluded_block_px;
   ColorHistograms& h = histograms_[round.camera];
   FlowEquations& out = CameraEquations(round);
   RegionCounts& counts = CameraCounts(round);

@@ -43,6 +43,12 @@ struct RegionModalityOptions {
   double min_sigma_px = 0.5;     // floor of the contour position's standard deviation
   double max_sigma_px = 5.0;     // lines more uncertain than this give no row
   double min_contrast = 0.2;     // lines whose mean |P_f - 0.5| * 2 is below this give no row
+  // Lines whose contour point, or the point occluded_probe_px inside it, lies in a block
+  // the photometric modality found occluded (RegionModalityInput::occluded_blocks) are
+  // left out: across an occluder a line sees the occluder's colours where the object
+  // should be and pulls the contour in, and it would teach the histograms the occluder.
+  bool skip_occluded_lines = true;
+  int occluded_probe_px = 3;
   // Robust kernel, scales and weight against the other modalities (residuals: contour
   // offsets over their standard deviation). Half weight: beside a texture that fits, the
   // colour statistics of thin parts and of backgrounds with the object's colours mislead
@@ -108,6 +114,7 @@ struct RegionCounts {
   // pixel of the rendered contour: the image has an edge where the silhouette is (a test
   // that owes nothing to the learnt statistics).
   long edge_lines = 0;
+  long occluded = 0;       // contour samples left out in occluded blocks
   RegionCounts& operator+=(const RegionCounts& o);
   // Share of lines with the edge on the contour, or -1 with no line.
   double EdgeShare() const { return lines > 0 ? double(edge_lines) / double(lines) : -1.0; }
@@ -128,6 +135,10 @@ struct RegionModalityInput {
   PinholeCamera camera;                     // the level's camera
   Eigen::Vector3d origin_in_cam = Eigen::Vector3d::Zero();
   int level = 0;
+  // Optional blocks found occluded (RegionModalityOptions::skip_occluded_lines): CV_8UC1,
+  // non-zero where occluded, occluded_block_px buffer pixels a side from the buffer's corner.
+  const cv::Mat* occluded_blocks = nullptr;
+  int occluded_block_px = 0;
 };
 
 // Appends one row per usable correspondence line to `out` (rows in the camera frame) when

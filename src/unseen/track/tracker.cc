@@ -69,8 +69,9 @@ std::string SolveSummary::BriefReport() const {
                         1e3 * depth_residual_m)
           : std::string(),
       region_counts.lines
-          ? fmt::format(" | region lines {} used {} agree {:.2f} res {:.2f}", region_counts.lines,
-                        region_counts.used, region_counts.Agreement(), region_residual)
+          ? fmt::format(" | region lines {} used {} occluded {} agree {:.2f} res {:.2f}",
+                        region_counts.lines, region_counts.used, region_counts.occluded,
+                        region_counts.Agreement(), region_residual)
           : std::string(),
       times.predict_ms, times.render_ms, times.preprocess_ms, times.select_ms, times.solve_ms,
       times.total_ms);
@@ -531,17 +532,28 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
       photometric_.BeginRound(ncam);
       depth_.BeginRound(ncam);
       region_.BeginRound(ncam);
+      // The silhouette's lines skip the blocks the photometric selection found occluded
+      // (RegionModalityOptions::skip_occluded_lines): its jobs then wait for that selection.
       enum ModalityJob { kPhotometricJob, kDepthJob, kRegionJob, kModalityJobs };
+      const bool region_waits = options_.region.enabled && use_photometric_ &&
+                                options_.region.skip_occluded_lines &&
+                                options_.selection.use_occlusion_rejection &&
+                                options_.selection.block_min_share_ratio > 0.0;
       jobs.clear();
+      std::vector<int> later_jobs;
       for (int c = 0; c < ncam; ++c) {
         const CameraWork& w = *work_[c];
         if (!w.active || !w.virtual_ok) continue;
         if (use_photometric_) jobs.push_back(kModalityJobs * c + kPhotometricJob);
         if (use_depth && !frame.depths[c].empty()) jobs.push_back(kModalityJobs * c + kDepthJob);
-        if (options_.region.enabled) jobs.push_back(kModalityJobs * c + kRegionJob);
+        if (options_.region.enabled) {
+          (region_waits ? later_jobs : jobs).push_back(kModalityJobs * c + kRegionJob);
+        }
       }
+      const size_t first_later_job = jobs.size();
+      jobs.insert(jobs.end(), later_jobs.begin(), later_jobs.end());
       std::vector<double> job_ms(jobs.size(), 0.0);
-      RunParallel(static_cast<int>(jobs.size()), [&](int j) {
+      auto run_modality_job = [&](int j) {
         const int c = jobs[j] / kModalityJobs;
         CameraWork& w = *work_[c];
         Timer select_timer;
@@ -570,10 +582,17 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
             depth_.AddEquations(round);
             break;
           default:
+            if (region_waits) {
+              round.occluded_blocks = photometric_.occluded_blocks(c);
+              round.occluded_block_px = photometric_.block_px();
+            }
             region_.AddEquations(round);
         }
         job_ms[j] = select_timer.ElapsedMilliseconds();
-      });
+      };
+      RunParallel(static_cast<int>(first_later_job), run_modality_job);
+      RunParallel(static_cast<int>(jobs.size() - first_later_job),
+                  [&](int j) { run_modality_job(static_cast<int>(first_later_job) + j); });
       for (size_t j = 0; j < jobs.size(); ++j) {
         work_[jobs[j] / kModalityJobs]->times.select_ms += job_ms[j];
       }

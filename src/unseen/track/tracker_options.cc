@@ -328,6 +328,8 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"min_sigma_px", YamlField(&rg.min_sigma_px)},
         {"max_sigma_px", YamlField(&rg.max_sigma_px)},
         {"min_contrast", YamlField(&rg.min_contrast)},
+        {"skip_occluded_lines", YamlField(&rg.skip_occluded_lines)},
+        {"occluded_probe_px", YamlField(&rg.occluded_probe_px)},
         {"kernel", YamlEnumField(&rg.residual.kernel, &ParseRobustKernel)},
         {"kernel_width", YamlField(&rg.residual.kernel_width)},
         {"min_scale", YamlField(&rg.residual.min_scale)},
