@@ -455,6 +455,50 @@ TEST(RegionModality, LinesAcrossAnOccluderAreLeftOut) {
   EXPECT_EQ(off.occluded, 0);
 }
 
+// The textured cube at rest, half hidden by a plate that covers its right part and contour. The occluder's blocks leave little of the texture in use, so the texture alone
+// vouches weakly; the silhouette, which skips the lines across the plate and sits on the
+// visible contour, lets the visible texture support the pose. Without the silhouette
+// nothing changes.
+TEST(OccludedTexture, TheSilhouetteLetsTheVisibleTextureVouch) {
+  const Rig rig = testing::OneCameraRig();
+  const Mesh cube = MakeLetteredCube(0.096, 16);
+  // Far enough that what stays visible is fewer pixels than FailureOptions::good_used_px.
+  const Rigid3d truth(CubePose().rotation(), Eigen::Vector3d(0.02, -0.01, 1.6));
+  const cv::Mat background = testing::Background(rig.cameras[0].intrinsics, 7);
+  const cv::Mat clear = testing::RenderOverBackground(cube, rig.cameras[0], truth, background);
+  cv::Mat occluded = clear.clone();
+  RenderBuffers buffers;
+  Render(cube, rig.cameras[0].intrinsics, rig.cameras[0].cam_from_world() * truth,
+         rig.cameras[0].intrinsics.ImageRect(), RenderOptions(), &buffers);
+  const cv::Rect rect = cv::boundingRect(buffers.mask);
+  ASSERT_GT(rect.width, 40);
+  // A flat green plate over the right half of the cube and beyond.
+  const int x0 = rect.x + int(0.5 * rect.width);
+  const cv::Rect plate(x0, rect.y - 10, rect.x + rect.width + 10 - x0, rect.height + 20);
+  occluded(plate).setTo(cv::Vec3f(0.3f, 0.6f, 0.2f));
+
+  auto track_occluded = [&](const std::string& yaml) {
+    Tracker tracker(rig, cube, ParseTrackerOptions(yaml));
+    tracker.Initialize(truth);
+    for (int k = 0; k < 3; ++k) tracker.Track({clear});
+    return tracker.Track({occluded});
+  };
+  const TrackResult vouched = track_occluded("");
+  const TrackResult alone = track_occluded("failure: {min_visible_fraction: 0}\n");
+  ASSERT_GT(vouched.summary.counts.occluded_gradient, 0) << vouched.BriefReport();
+  EXPECT_EQ(vouched.status, TrackStatus::kTracking) << vouched.BriefReport();
+  EXPECT_GT(vouched.confidence, alone.confidence + 0.2)
+      << vouched.BriefReport() << "\n" << alone.BriefReport();
+  const PoseDifference e = Difference(vouched.world_from_obj, truth);
+  EXPECT_LT(e.translation, 0.005) << vouched.BriefReport();  // 0.3 % of the distance
+  EXPECT_LT(e.rotation_rad, 1.0 * kDeg) << vouched.BriefReport();
+  // Without the silhouette the texture judges alone, as before.
+  const TrackResult no_region = track_occluded("region: {enabled: false}\n");
+  const TrackResult no_region_alone =
+      track_occluded("region: {enabled: false}\nfailure: {min_visible_fraction: 0}\n");
+  EXPECT_DOUBLE_EQ(no_region.confidence, no_region_alone.confidence);
+}
+
 TEST(ModalityOptions, CheckRejectsNonsense) {
   DepthModalityOptions depth;
   EXPECT_NO_THROW(depth.Check());
@@ -475,6 +519,7 @@ TEST(ModalityOptions, CheckRejectsNonsense) {
   EXPECT_FALSE(
       ParseTrackerOptions("region: {skip_occluded_lines: false}\n").region.skip_occluded_lines);
   EXPECT_THROW(ParseTrackerOptions("region: {occluded_probe_px: -1}\n"), Error);
+  EXPECT_THROW(ParseTrackerOptions("failure: {min_visible_fraction: 0.6}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("depth: {colour: 1}\n"), Error);
   const TrackerOptions drag =
       ParseTrackerOptions("photometric: {start_drag_px: 5, start_drag_ratio: 3}\n");

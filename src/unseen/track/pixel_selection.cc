@@ -65,6 +65,7 @@ SelectionCounts& SelectionCounts::operator+=(const SelectionCounts& o) {
   rejected_undirected += o.rejected_undirected;
   rejected_normal_flow += o.rejected_normal_flow;
   rejected_block += o.rejected_block;
+  occluded_gradient += o.occluded_gradient;
   used += o.used;
   equations += o.equations;
   block_share_sum += o.block_share_sum;
@@ -331,6 +332,7 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
                   float(block_passed[b]) < min_share * float(block_gradient[b]);
         if (drop[b]) {
           if (occluded_blocks) occluded_blocks->data[b] = 255;
+          c.occluded_gradient += block_gradient[b];
           c.rejected_block += block_used[b];
           c.used -= block_used[b];
         }

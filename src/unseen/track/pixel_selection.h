@@ -69,6 +69,7 @@ struct SelectionCounts {
   long rejected_undirected = 0;      // 3.6, lambda1 / lambda2 below the ratio
   long rejected_normal_flow = 0;     // (4.9)
   long rejected_block = 0;           // in a block that mostly failed the tests
+  long occluded_gradient = 0;        // gradient pixels of those blocks (all of them)
   long used = 0;                     // pixels that gave at least one equation
   long equations = 0;
   // Over the counted blocks b (PixelSelectionOptions::block_px): the sum of used_b^2 /
@@ -78,6 +79,8 @@ struct SelectionCounts {
   long block_used = 0;
   // Pixels with rendered gradient, the denominator of the survival share (3.9).
   long gradient_pixels() const { return candidates - rejected_gradient; }
+  // Gradient pixels outside the blocks found occluded: the texture the camera can see.
+  long visible_gradient_pixels() const { return gradient_pixels() - occluded_gradient; }
   // Mean survival share of the used pixels' blocks in [0, 1]: near the share of a clear
   // view when the rejected pixels are gathered in whole blocks (an occluder), near the
   // overall share when they are spread evenly (a misaligned pose); 0 without blocks.

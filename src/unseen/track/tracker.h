@@ -213,8 +213,11 @@ class Tracker {
   double Confidence(const SolveSummary& summary, bool with_references = true) const;
   double ModalityConfidence(const SolveSummary& summary, bool with_references = true) const;
   // The photometric modality's own judgement of the alignment in [0, 1] (FailureOptions:
-  // support, residual, convergence), whatever the other modalities say.
-  double PhotometricFit(const SolveSummary& summary, bool with_references = true) const;
+  // support, residual, convergence). `silhouette_term` in [0, 1], what the silhouette
+  // vouches for, lets the visible texture alone support the pose behind an occluder
+  // (FailureOptions::min_visible_fraction); 0: the texture judges by itself.
+  double PhotometricFit(const SolveSummary& summary, bool with_references = true,
+                        double silhouette_term = 0.0) const;
   // The region modality's residual over the running mean of the confident frames' (with
   // FailureOptions::min_reference_region_residual as its floor); 0 before any.
   double RegionResidualRatio(const SolveSummary& summary) const;

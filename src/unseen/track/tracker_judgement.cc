@@ -19,14 +19,28 @@ double Ramp(double value, double zero_at, double one_at) {
 
 }  // namespace
 
-double Tracker::PhotometricFit(const SolveSummary& s, bool with_references) const {
+double Tracker::PhotometricFit(const SolveSummary& s, bool with_references,
+                               double silhouette_term) const {
   const FailureOptions& f = options_.failure;
   if (s.counts.used < f.min_pixels) return 0.0;
   // Used pixels in level-0 pixels: a large object aligned at a coarser finest level
   // (PyramidOptions::max_finest_px) is as well supported as at level 0.
   const double used_px = double(s.counts.used) * double(1 << (2 * s.finest_level));
-  const double support_term = std::max(Ramp(s.share, f.min_share, f.good_share),
-                                       Ramp(used_px, f.min_used_px, f.good_used_px));
+  double support_term = std::max(Ramp(s.share, f.min_share, f.good_share),
+                                 Ramp(used_px, f.min_used_px, f.good_used_px));
+  if (f.min_visible_fraction > 0.0 && silhouette_term > 0.0 && s.counts.occluded_gradient > 0) {
+    // Texture behind an occluder (whole blocks that failed the occlusion tests together)
+    // cannot support the pose: where the silhouette vouches for it, the share counts the
+    // visible texture, while enough of it is visible.
+    const double gradient = double(s.counts.gradient_pixels());
+    const double visible = double(s.counts.visible_gradient_pixels());
+    if (visible > 0.0 && gradient > 0.0) {
+      support_term = std::max(
+          support_term,
+          silhouette_term * Ramp(double(s.counts.used) / visible, f.min_share, f.good_share) *
+              Ramp(visible / gradient, f.min_visible_fraction, f.good_visible_fraction));
+    }
+  }
   double residual_term = Ramp(s.initial_residual_px, f.bad_residual_px, f.good_residual_px);
   if (with_references && residual_reference_px_ > 0.0) {
     const double reference = std::max(residual_reference_px_, f.min_reference_residual_px);
@@ -50,7 +64,6 @@ double Tracker::Confidence(const SolveSummary& s, bool with_references) const {
 
 double Tracker::ModalityConfidence(const SolveSummary& s, bool with_references) const {
   const FailureOptions& f = options_.failure;
-  const double photometric = PhotometricJudges() ? PhotometricFit(s, with_references) : 0.0;
   // The silhouette judges the frame of a model without appearance; with measured depth to
   // guard it, it also vouches for a frame whose texture says little (motion blur). Measured
   // depth, when there is some, must agree in every case.
@@ -64,6 +77,8 @@ double Tracker::ModalityConfidence(const SolveSummary& s, bool with_references) 
                           f.good_region_residual_ratio);
     }
   }
+  const double photometric =
+      PhotometricJudges() ? PhotometricFit(s, with_references, region_term) : 0.0;
   const double depth_agreement = s.depth_counts.Agreement(options_.depth);
   if (depth_agreement < 0.0) {
     // Colours taken from the tracked frames vouch for the frame-to-frame fit only; the

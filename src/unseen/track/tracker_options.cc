@@ -86,6 +86,10 @@ void FailureOptions::Check() const {
   UNSEEN_CHECK(min_pixels >= 6, "failure.min_pixels {} must be >= 6", min_pixels);
   UNSEEN_CHECK(min_region_lines >= 1, "failure.min_region_lines {} must be >= 1",
                min_region_lines);
+  UNSEEN_CHECK(0.0 <= min_visible_fraction && min_visible_fraction < good_visible_fraction &&
+                   good_visible_fraction <= 1.0,
+               "failure: need 0 <= min_visible_fraction ({}) < good_visible_fraction ({}) <= 1",
+               min_visible_fraction, good_visible_fraction);
   UNSEEN_CHECK(0.0 <= min_area_ratio && min_area_ratio < good_area_ratio && good_area_ratio <= 1.0,
                "failure: need 0 <= min_area_ratio ({}) < good_area_ratio ({}) <= 1",
                min_area_ratio, good_area_ratio);
@@ -276,6 +280,8 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"bad_region_residual_ratio", YamlField(&fa.bad_region_residual_ratio)},
         {"min_reference_region_residual", YamlField(&fa.min_reference_region_residual)},
         {"min_region_lines", YamlField(&fa.min_region_lines)},
+        {"min_visible_fraction", YamlField(&fa.min_visible_fraction)},
+        {"good_visible_fraction", YamlField(&fa.good_visible_fraction)},
         {"min_area_ratio", YamlField(&fa.min_area_ratio)},
         {"good_area_ratio", YamlField(&fa.good_area_ratio)},
         {"area_memory_frames", YamlField(&fa.area_memory_frames)},

@@ -136,6 +136,13 @@ struct FailureOptions {
   double good_share = 0.5;
   double min_used_px = 500;     // used pixels (all cameras)
   double good_used_px = 2500;
+  // Behind an occluder (SelectionCounts::occluded_gradient), where the silhouette vouches
+  // for the pose (its agreement and residual terms), the share above may count only the
+  // visible texture, times the ramp of the visible fraction of the texture from
+  // min_visible_fraction to good_visible_fraction and times the silhouette's term; 0
+  // disables it.
+  double min_visible_fraction = 0.25;
+  double good_visible_fraction = 0.5;
   // A camera's image is no render: sensor noise, blur, compression and shading the model
   // lacks leave 0.5-0.6 px of normal-flow residual at the true pose on real footage (0.2-0.4
   // on renders); the ratio to the reference residual below judges a frame against its own
