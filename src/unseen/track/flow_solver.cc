@@ -117,6 +117,26 @@ void ModalityEquations::Clear() {
   for (FlowEquations& eq : cameras) eq.Clear();
 }
 
+double ModalityEquations::TrimmedRms(double share) const {
+  UNSEEN_CHECK(share > 0.0 && share <= 1.0, "TrimmedRms: share {} not in (0, 1]", share);
+  std::vector<float> squared;
+  squared.reserve(size());
+  for (const FlowEquations& eq : cameras) {
+    for (int i = 0; i < eq.size(); ++i) {
+      const float r = eq.rhs[i] * eq.inv_grad_norm[i];
+      squared.push_back(r * r);
+    }
+  }
+  if (squared.empty()) return 0.0;
+  const size_t kept = std::max<size_t>(1, static_cast<size_t>(share * squared.size()));
+  if (kept < squared.size()) {
+    std::nth_element(squared.begin(), squared.begin() + (kept - 1), squared.end());
+  }
+  double sum = 0.0;
+  for (size_t i = 0; i < kept; ++i) sum += squared[i];
+  return std::sqrt(sum / kept);
+}
+
 namespace {
 
 // 1.4826 times the median of the values (a robust standard deviation), from an even spread of

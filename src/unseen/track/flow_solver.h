@@ -83,6 +83,9 @@ struct ModalityEquations {
   std::vector<FlowEquations> cameras;
   int size() const;
   void Clear();  // keeps the cameras and their capacity
+  // RMS normalized residual at a zero twist over the `share` (in (0, 1]) of the equations
+  // with the smallest residuals (share 1: ModalityStats::initial_rms); 0 without equations.
+  double TrimmedRms(double share) const;
 };
 
 // What the solve saw of one modality.

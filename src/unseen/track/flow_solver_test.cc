@@ -248,6 +248,25 @@ TEST(FlowSolver, AModalitysDampingShortensItsOwnStepOnly) {
   EXPECT_THROW(damped.model.Check("region"), Error);
 }
 
+TEST(FlowSolver, TrimmedRmsLeavesOutTheLargestResiduals) {
+  ModalityEquations m;
+  m.cameras.resize(2);
+  const float row[6] = {1, 0, 0, 0, 0, 0};
+  // Nine unit offsets over two cameras and one of 10 (an occluded line).
+  for (int i = 0; i < 9; ++i) m.cameras[i % 2].Add(row, (i % 2 ? -1.0f : 1.0f), 1.0f);
+  m.cameras[1].Add(row, 10.0f, 1.0f);
+  EXPECT_NEAR(m.TrimmedRms(1.0), std::sqrt(109.0 / 10.0), 1e-6);
+  EXPECT_NEAR(m.TrimmedRms(0.9), 1.0, 1e-6);
+  EXPECT_NEAR(m.TrimmedRms(0.05), 1.0, 1e-6);  // at least one equation
+  // Residuals are scaled by inv_grad_norm as in the solve.
+  m.cameras[0].inv_grad_norm.assign(m.cameras[0].inv_grad_norm.size(), 2.0f);
+  EXPECT_NEAR(m.TrimmedRms(0.4), 1.0, 1e-6);                   // camera 1's four 1s
+  EXPECT_NEAR(m.TrimmedRms(0.9), std::sqrt(24.0 / 9.0), 1e-6);  // and camera 0's five 2s
+  EXPECT_THROW(m.TrimmedRms(0.0), Error);
+  EXPECT_THROW(m.TrimmedRms(1.5), Error);
+  EXPECT_EQ(ModalityEquations().TrimmedRms(0.9), 0.0);
+}
+
 TEST(FlowSolver, OptionsCheck) {
   FlowSolverOptions o;
   EXPECT_NO_THROW(o.Check());

@@ -455,7 +455,8 @@ TEST(RegionModality, LinesAcrossAnOccluderAreLeftOut) {
   EXPECT_EQ(off.occluded, 0);
 }
 
-// The textured cube at rest, half hidden by a plate that covers its right part and contour. The occluder's blocks leave little of the texture in use, so the texture alone
+// The textured cube at rest, half hidden by a plate that covers its right part and contour
+// (then also crossed by thin rods the texture's blocks miss). The occluder's blocks leave little of the texture in use, so the texture alone
 // vouches weakly; the silhouette, which skips the lines across the plate and sits on the
 // visible contour, lets the visible texture support the pose. Without the silhouette
 // nothing changes.
@@ -492,6 +493,20 @@ TEST(OccludedTexture, TheSilhouetteLetsTheVisibleTextureVouch) {
   const PoseDifference e = Difference(vouched.world_from_obj, truth);
   EXPECT_LT(e.translation, 0.005) << vouched.BriefReport();  // 0.3 % of the distance
   EXPECT_LT(e.rotation_rad, 1.0 * kDeg) << vouched.BriefReport();
+  // Thin dark rods across the left contour as well, which the texture's blocks miss: the
+  // silhouette is judged on its best lines.
+  for (int k = 0; k < 2; ++k) {
+    const int y = rect.y + rect.height / 3 + k * rect.height / 3;
+    cv::line(occluded, cv::Point(rect.x - 14, y), cv::Point(rect.x + 5, y),
+             cv::Scalar(0.05, 0.05, 0.05), 2);
+  }
+  const TrackResult rods = track_occluded("");
+  const TrackResult rods_all_lines = track_occluded("failure: {occluded_region_share: 1}\n");
+  EXPECT_EQ(rods.status, TrackStatus::kTracking) << rods.BriefReport();
+  EXPECT_LT(rods.summary.region_residual, 0.5 * rods_all_lines.summary.region_residual)
+      << rods.BriefReport() << "\n" << rods_all_lines.BriefReport();
+  EXPECT_GT(rods.confidence, rods_all_lines.confidence + 0.2)
+      << rods.BriefReport() << "\n" << rods_all_lines.BriefReport();
   // Without the silhouette the texture judges alone, as before.
   const TrackResult no_region = track_occluded("region: {enabled: false}\n");
   const TrackResult no_region_alone =
@@ -520,6 +535,10 @@ TEST(ModalityOptions, CheckRejectsNonsense) {
       ParseTrackerOptions("region: {skip_occluded_lines: false}\n").region.skip_occluded_lines);
   EXPECT_THROW(ParseTrackerOptions("region: {occluded_probe_px: -1}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("failure: {min_visible_fraction: 0.6}\n"), Error);
+  EXPECT_EQ(ParseTrackerOptions("failure: {occluded_region_share: 0.8}\n")
+                .failure.occluded_region_share,
+            0.8);
+  EXPECT_THROW(ParseTrackerOptions("failure: {occluded_region_share: 0}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("depth: {colour: 1}\n"), Error);
   const TrackerOptions drag =
       ParseTrackerOptions("photometric: {start_drag_px: 5, start_drag_ratio: 3}\n");

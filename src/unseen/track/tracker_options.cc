@@ -86,6 +86,8 @@ void FailureOptions::Check() const {
   UNSEEN_CHECK(min_pixels >= 6, "failure.min_pixels {} must be >= 6", min_pixels);
   UNSEEN_CHECK(min_region_lines >= 1, "failure.min_region_lines {} must be >= 1",
                min_region_lines);
+  UNSEEN_CHECK(occluded_region_share > 0.0 && occluded_region_share <= 1.0,
+               "failure.occluded_region_share {} must be in (0, 1]", occluded_region_share);
   UNSEEN_CHECK(0.0 <= min_visible_fraction && min_visible_fraction < good_visible_fraction &&
                    good_visible_fraction <= 1.0,
                "failure: need 0 <= min_visible_fraction ({}) < good_visible_fraction ({}) <= 1",
@@ -278,6 +280,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"min_pixels", YamlField(&fa.min_pixels)},
         {"good_region_residual_ratio", YamlField(&fa.good_region_residual_ratio)},
         {"bad_region_residual_ratio", YamlField(&fa.bad_region_residual_ratio)},
+        {"occluded_region_share", YamlField(&fa.occluded_region_share)},
         {"min_reference_region_residual", YamlField(&fa.min_reference_region_residual)},
         {"min_region_lines", YamlField(&fa.min_region_lines)},
         {"min_visible_fraction", YamlField(&fa.min_visible_fraction)},

@@ -171,6 +171,11 @@ struct FailureOptions {
   // contour (2-4x the reference; confident frames stay within 2x).
   double good_region_residual_ratio = 2.0;
   double bad_region_residual_ratio = 3.0;
+  // Where the photometric selection found an occluder (SelectionCounts::occluded_gradient),
+  // that residual is the RMS of this share of the silhouette's lines, those with the
+  // smallest offsets: lines across a thin occluder that the texture's blocks missed (legs,
+  // rods) are the rest. 1: all lines always.
+  double occluded_region_share = 0.9;
   // Floor of that running mean, standard deviations: below it the contour sits within its
   // own noise, where a doubling means nothing (renders without noise, sharp contours).
   double min_reference_region_residual = 1.0;
