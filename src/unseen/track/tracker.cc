@@ -52,12 +52,13 @@ std::string SolveSummary::BriefReport() const {
   }
   return fmt::format(
       "levels {} iters {} renders {} re-solves {} | px cand {} grad- {} occ- {}/{}/{} undir- {} flow- {} "
-      "block- {} used {} (share {:.2f} block {:.2f}) | res {:.3f}->{:.3f} px, last upd {:.3f} "
+      "block- {} (hidden {}) used {} (share {:.2f} block {:.2f}) | res {:.3f}->{:.3f} px, last upd {:.3f} "
       "px, corr {:.1f} px{}{}{} | ms pred {:.3f} rend {:.3f} pre {:.3f} sel {:.3f} solve {:.3f} "
       "total {:.3f}",
       num_levels, iters, renders, resamples, counts.candidates, counts.rejected_gradient,
       counts.rejected_input_gradient, counts.rejected_direction, counts.rejected_magnitude,
-      counts.rejected_undirected, counts.rejected_normal_flow, counts.rejected_block, counts.used,
+      counts.rejected_undirected, counts.rejected_normal_flow, counts.rejected_block,
+      counts.occluded_gradient, counts.used,
       share, counts.BlockShare(),
       initial_residual_px, final_residual_px, last_update_px, correction_px,
       search_candidates
