@@ -13,14 +13,13 @@ void PhotometricModality::BeginRound(int num_cameras) {
   for (CameraRound& r : rounds_) {
     r.samples.clear();
     r.input = nullptr;
-    r.selected = false;
   }
 }
 
 const cv::Mat* PhotometricModality::occluded_blocks(int camera) const {
   if (camera < 0 || camera >= static_cast<int>(rounds_.size())) return nullptr;
   const CameraRound& r = rounds_[camera];
-  return r.selected ? &r.occluded_blocks : nullptr;
+  return r.input ? &r.occluded_blocks : nullptr;
 }
 
 void PhotometricModality::AddEquations(const ModalityRound& round) {
@@ -42,7 +41,6 @@ void PhotometricModality::AddEquations(const ModalityRound& round) {
   r.origin_in_cam = round.origin_in_cam;
   SelectPixels(in, options_, &CameraEquations(round), &CameraCounts(round), &r.samples,
                &r.occluded_blocks);
-  r.selected = true;
   const cv::Mat& mask = round.virtual_image->mask;
   if (remeasure_margin_px_ > 0) {
     const int size = 2 * remeasure_margin_px_ + 1;

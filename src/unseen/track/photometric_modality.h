@@ -43,8 +43,8 @@ class PhotometricModality : public CountingModality<SelectionCounts> {
     std::vector<uint8_t> remeasure;          // per equation: inside the margin
     cv::Mat interior;                        // the rendered mask eroded by the margin
     cv::Mat occluded_blocks;                 // SelectPixels' dropped blocks
-    bool selected = false;                   // AddEquations ran this round
-    const cv::Mat* input = nullptr;          // the pre-processed input, of the size of roi
+    // The pre-processed input, of the size of roi; null until AddEquations of this round.
+    const cv::Mat* input = nullptr;
     PixelRect roi;
     PinholeCamera camera;
     Eigen::Vector3d origin_in_cam = Eigen::Vector3d::Zero();
