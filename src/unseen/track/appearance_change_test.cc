@@ -6,8 +6,10 @@
 #include <cmath>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
 #include "unseen/mesh/primitives.h"
+#include "unseen/render/rasterizer.h"
 #include "unseen/track/test_scene.h"
 #include "unseen/track/tracker.h"
 #include "unseen/util/error.h"
@@ -113,6 +115,49 @@ TEST_F(AppearanceChange, ColoursThatNeverFittedComeFromTheFrames) {
   Tracker kept(rig_, model_, options);
   TrackSequence(&kept, 12, 0);
   EXPECT_TRUE(kept.model().projectors.empty());
+}
+
+TEST_F(AppearanceChange, AnOccluderIsNotTakenForColoursThatNeverFitted) {
+  // The cube seen with its own colours, but a textured occluder (a patch of another scene)
+  // hides the left half of it from the first frame on: few of its pixels survive, but the
+  // rejected ones gather where the occluder is. With the thresholds set so that this share
+  // counts as a poor fit, the model still keeps its colours: the occluder, not the colours,
+  // rejected them.
+  const PinholeCamera& camera = rig_.cameras[0].intrinsics;
+  RenderBuffers buffers;
+  Render(model_, camera, rig_.cameras[0].cam_from_world() * Truth(0), camera.ImageRect(),
+         RenderOptions(), &buffers);
+  const cv::Rect box = cv::boundingRect(buffers.mask);
+  const cv::Rect hidden(box.x - 8, 0, box.width / 2 + 8, camera.height);
+  const cv::Mat cover = testing::Background(camera, 23);
+  auto occluded = [&](int k) {
+    cv::Mat image = Image(model_, k);
+    cover(hidden).copyTo(image(hidden));
+    return image;
+  };
+  // Tracks 12 frames; whether the model took its colours from them.
+  auto track = [&](const TrackerOptions& options, bool check_frames) {
+    Tracker tracker(rig_, model_, options);
+    tracker.Initialize(Truth(0));
+    for (int k = 0; k < 12; ++k) {
+      const TrackResult r = tracker.Track({occluded(k)});
+      if (!check_frames) continue;
+      EXPECT_EQ(r.status, TrackStatus::kTracking) << "frame " << k << ": " << r.BriefReport();
+      EXPECT_LT(r.summary.share, 0.8) << "frame " << k << ": " << r.BriefReport();
+      EXPECT_LT(Difference(r.world_from_obj, Truth(k)).translation, 0.005)
+          << "frame " << k << ": " << r.BriefReport();
+    }
+    return !tracker.model().projectors.empty();
+  };
+  TrackerOptions options;
+  options.photometric.light_change_fit = 0.0;  // this test is about the switch alone
+  options.live_appearance.poor_fit_share = 0.8;
+  options.live_appearance.poor_fit_best_share = 1.0;
+  EXPECT_FALSE(track(options, true)) << "the occluder was taken for colours that never fitted";
+  // Counting the gathered frames too, the model would take its colours from the frames,
+  // the occluder's included.
+  options.photometric.light_change_max_gathering = 1.0;
+  EXPECT_TRUE(track(options, false));
 }
 
 TEST(AppearanceChangeOptions, ParsedAndChecked) {

@@ -60,8 +60,12 @@ struct LiveAppearanceOptions {
   // SolveSummary) for poor_fit_frames tracked frames in a row, and never more than
   // poor_fit_best_share since the start, takes its colours from the frames. (Models lit
   // like their renders keep 0.56-0.90 of their pixels; a real camera's cube at best 0.54,
-  // a textured model under a circling lamp 0.39. An occluder lowers the share for a while,
-  // but the frames before it showed a good fit.) 0 frames: never.
+  // a textured model under a circling lamp 0.39.) A frame whose rejected pixels gather in
+  // blocks (SelectionCounts::RejectionGathering at least
+  // PhotometricOptions::light_change_max_gathering) shows an occluder, not the colours: it
+  // is not counted, and the frames after it go on counting (a textured box under a lamp,
+  // best 0.51, falls to 0.31 with 0.6-0.7 of its rejections gathered while something
+  // crosses in front; the real cube's poor frames gather 0.38-0.43). 0 frames: never.
   double poor_fit_share = 0.4;
   int poor_fit_frames = 5;
   double poor_fit_best_share = 0.6;

@@ -43,7 +43,12 @@ bool Tracker::ColoursNeverFitted(const TrackResult& r) {
   }
   const double share = r.summary.share;
   best_share_ = std::max(best_share_, share);
-  poor_fit_frames_ = share < lo.poor_fit_share ? poor_fit_frames_ + 1 : 0;
+  if (share >= lo.poor_fit_share) {
+    poor_fit_frames_ = 0;
+  } else if (r.summary.counts.RejectionGathering() <
+             options_.photometric.light_change_max_gathering) {
+    ++poor_fit_frames_;  // spread over the object: the colours, not an occluder
+  }
   return poor_fit_frames_ >= lo.poor_fit_frames && best_share_ < lo.poor_fit_best_share;
 }
 
