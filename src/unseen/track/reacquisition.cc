@@ -478,6 +478,15 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
   // The coasted pose first: an object that comes out from behind an occluder is most
   // likely where it went on moving.
   std::vector<Rigid3d> candidates{coasted};
+  // Then the coasted turn with the object's centre held where it was last seen: a hand
+  // that turns an object behind an occluder goes on turning it, while the extrapolated
+  // translation (weakest in depth, and learnt from the fading frames before the loss) may
+  // run away.
+  if (o.turn_in_place) {
+    const Rigid3d turned = RotatedAboutPoint(
+        last_good, coasted.rotation() * last_good.rotation().inverse(), sphere_centre_);
+    if ((turned.translation() - coasted.translation()).norm() > 1e-6) candidates.push_back(turned);
+  }
   const std::vector<Rigid3d> around = ReacquisitionCandidates(
       last_good, seeds, sphere_centre_, options.failure.search_offset * sphere_radius_, o);
   // A new loss (another last good pose) starts with a complete search.

@@ -146,12 +146,14 @@ class Reacquisition {
   // `frame` is checked (Tracker::CheckFrame); its depth, if any, serves the full-resolution
   // alignments.
   // While lost: correlates `last_good` and its turns, scores `coasted` (where the motion
-  // model carries the object) and the candidates around `last_good` at the coarse levels
-  // (successive halving down to level 1), aligns the best options.refine_candidates at
-  // full resolution (stopping once one reaches failure.recover_confidence) and returns the
-  // most confident of them (confidence 0 at `coasted` when none was refined;
-  // summary.search_candidates = poses tried, times summed). After a search that found
-  // nothing, the next ones of the same loss are quiet (options.quiet_candidates).
+  // model carries the object), its turn with the object's centre held at `last_good`
+  // (ReacquisitionOptions::turn_in_place) and the candidates around `last_good` at the
+  // coarse levels (successive halving down to level 1), aligns the best
+  // options.refine_candidates at full resolution (stopping once one reaches
+  // failure.recover_confidence) and returns the most confident of them (confidence 0 at
+  // `coasted` when none was refined; summary.search_candidates = poses tried, times
+  // summed). After a search that found nothing, the next ones of the same loss are quiet
+  // (options.quiet_candidates).
   TrackResult Search(const Frame& frame, const Rigid3d& last_good, const Rigid3d& coasted);
   // While tracking, for a doubtful frame: `first` is the full alignment from `predicted`.
   // Aligns from the correlation seed around `predicted` when it moves the object, and

@@ -302,6 +302,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"max_seeds", YamlField(&re.max_seeds)},
         {"rotation_deg", YamlField(&re.rotation_deg)},
         {"max_candidates", YamlField(&re.max_candidates)},
+        {"turn_in_place", YamlField(&re.turn_in_place)},
         {"score_iterations", YamlField(&re.score_iterations)},
         {"score_levels", YamlField(&re.score_levels)},
         {"refine_candidates", YamlField(&re.refine_candidates)},

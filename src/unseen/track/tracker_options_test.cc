@@ -66,7 +66,7 @@ TEST(TrackerOptions, ParsesTheReacquisitionSection) {
       "reacquisition: {use_correlation: false, seed_object_px: 32, search_radii: 6,\n"
       "  min_correlation: 0.4, max_seeds: 3, rotation_deg: 20, max_candidates: 10,\n"
       "  score_levels: 2, score_iterations: 4, refine_candidates: 3, refine_levels: 3,\n"
-      "  min_score: 0.1, quiet_candidates: -1,\n"
+      "  min_score: 0.1, quiet_candidates: -1, turn_in_place: false,\n"
       "  seed_when_doubtful: false, doubtful_confidence: 0.4, min_seed_shift_px: 2}\n");
   const ReacquisitionOptions& r = o.reacquisition;
   EXPECT_FALSE(r.use_correlation);
@@ -82,6 +82,7 @@ TEST(TrackerOptions, ParsesTheReacquisitionSection) {
   EXPECT_EQ(r.refine_levels, 3);
   EXPECT_DOUBLE_EQ(r.min_score, 0.1);
   EXPECT_EQ(r.quiet_candidates, -1);
+  EXPECT_FALSE(r.turn_in_place);
   EXPECT_FALSE(r.seed_when_doubtful);
   EXPECT_DOUBLE_EQ(r.doubtful_confidence, 0.4);
   EXPECT_DOUBLE_EQ(r.min_seed_shift_px, 2.0);
