@@ -481,14 +481,17 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
   // Then the coasted turn with the object's centre held where it was last seen: a hand
   // that turns an object behind an occluder goes on turning it, while the extrapolated
   // translation (weakest in depth, and learnt from the fading frames before the loss) may
-  // run away.
+  // run away. Not when the two are a fraction of a search step apart.
+  const double step_m = options.failure.search_offset * sphere_radius_;
   if (o.turn_in_place) {
     const Rigid3d turned = RotatedAboutPoint(
         last_good, coasted.rotation() * last_good.rotation().inverse(), sphere_centre_);
-    if ((turned.translation() - coasted.translation()).norm() > 1e-6) candidates.push_back(turned);
+    if ((turned.translation() - coasted.translation()).norm() > 0.25 * step_m) {
+      candidates.push_back(turned);
+    }
   }
-  const std::vector<Rigid3d> around = ReacquisitionCandidates(
-      last_good, seeds, sphere_centre_, options.failure.search_offset * sphere_radius_, o);
+  const std::vector<Rigid3d> around =
+      ReacquisitionCandidates(last_good, seeds, sphere_centre_, step_m, o);
   // A new loss (another last good pose) starts with a complete search.
   if (!quiet_last_good_ || !(quiet_last_good_->translation() == last_good.translation() &&
                              quiet_last_good_->rotation().coeffs() ==

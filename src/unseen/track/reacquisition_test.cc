@@ -377,9 +377,10 @@ TEST_F(Reacquire, WhileNothingIsFoundTheSearchesAreQuietUntilTheObjectIsBack) {
   ASSERT_GE(complete_counts.size(), 4u);
   ASSERT_EQ(quiet_counts.size(), complete_counts.size());
   // The first search of the loss is complete; once it found nothing, the next ones try
-  // the coasted pose, the seeds and quiet_candidates of the others.
+  // the coasted pose (and its turn in place), the seeds and quiet_candidates of the others.
   EXPECT_EQ(quiet_counts[0], complete_counts[0]);
-  const int most = 1 + quiet.reacquisition.max_seeds + quiet.reacquisition.quiet_candidates;
+  const int most = 1 + int(quiet.reacquisition.turn_in_place) + quiet.reacquisition.max_seeds +
+                   quiet.reacquisition.quiet_candidates;
   for (size_t k = 1; k < quiet_counts.size(); ++k) {
     EXPECT_LE(quiet_counts[k], most) << "lost frame " << k;
     EXPECT_LT(quiet_counts[k], complete_counts[k]) << "lost frame " << k;

@@ -261,41 +261,53 @@ TEST(TrackerFaults, RunOfNoiseAndBlackFramesIsReportedLostAndReacquired) {
                             NoiseFrame(Camera512(), 3), BlackFrame(Camera512())});
 }
 
-TEST(TrackerFaults, AnObjectHiddenForFramesIsLookedForWhereItsMotionCarriedIt) {
-  // The cube turns 5 degrees a frame about a slanted axis while it drifts; for eight frames
-  // the camera sees only the background (an occluder, a blackout). When it shows again it
-  // has turned 40 degrees from the last pose seen: the search's first candidate, where the
-  // motion model carried it, finds it at once, a short way from there.
-  const Rig rig = testing::OneCameraRig();
-  const Mesh cube = MakeLetteredCube(0.096, 128);
-  const cv::Mat background = Background(rig.cameras[0].intrinsics, 5);
-  const Eigen::Vector3d axis = Eigen::Vector3d(0.6, 1.0, 0.3).normalized();
-  auto truth = [&](int k) {
+// The lettered cube turning 5 degrees a frame about a slanted axis; for eight frames
+// (6-13) the camera sees only the background (an occluder, a blackout).
+class HiddenTurningCube : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    rig_ = testing::OneCameraRig();
+    cube_ = MakeLetteredCube(0.096, 128);
+    background_ = Background(rig_.cameras[0].intrinsics, 5);
+  }
+  // The cube at frame k with its origin at `position`.
+  Rigid3d Truth(int k, const Eigen::Vector3d& position) const {
+    const Eigen::Vector3d axis = Eigen::Vector3d(0.6, 1.0, 0.3).normalized();
     return Rigid3d(ExpSO3(5.0 * kDeg * k * axis) * ExpSO3(Eigen::Vector3d(0.45, 0.7, 0.1)),
-                   Eigen::Vector3d(-0.02 + 0.002 * k, -0.01, 1.0));
-  };
-  auto image = [&](int k, bool hidden) {
-    return hidden ? background.clone()
-                  : testing::RenderOverBackground(cube, rig.cameras[0], truth(k), background);
-  };
-  // The result of the first frame the cube shows again.
-  auto run = [&](int coast_frames) {
-    TrackerOptions options;
-    options.failure.coast_frames = coast_frames;
-    Tracker tracker(rig, cube, options);
+                   position);
+  }
+  // Tracks frames 0-13 of the cube at `truth(k)` (checking that it is tracked at frame 5
+  // and lost at the end) and returns the result of frame 14, where it shows again.
+  template <typename Truth>
+  TrackResult FirstFrameBack(const TrackerOptions& options, const Truth& truth) const {
+    Tracker tracker(rig_, cube_, options);
     tracker.Initialize(truth(0));
     for (int k = 0; k < 14; ++k) {
-      const bool hidden = k >= 6;
-      const TrackResult r = tracker.Track({image(k, hidden)});
+      const cv::Mat image =
+          k >= 6 ? background_.clone()
+                 : testing::RenderOverBackground(cube_, rig_.cameras[0], truth(k), background_);
+      const TrackResult r = tracker.Track({image});
       EXPECT_TRUE(r.world_from_obj.IsValid());
       if (k == 5) {
         EXPECT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
       }
     }
     EXPECT_EQ(tracker.status(), TrackStatus::kLost);
-    return tracker.Track({image(14, false)});
-  };
-  const TrackResult coasted = run(10);
+    return tracker.Track(
+        {testing::RenderOverBackground(cube_, rig_.cameras[0], truth(14), background_)});
+  }
+  Rig rig_;
+  Mesh cube_;
+  cv::Mat background_;
+};
+
+TEST_F(HiddenTurningCube, IsLookedForWhereItsMotionCarriedIt) {
+  // The cube drifts while it turns. When it shows again it has turned 40 degrees from the
+  // last pose seen: the search's first candidate, where the motion model carried it, finds
+  // it at once, a short way from there.
+  auto truth = [&](int k) { return Truth(k, Eigen::Vector3d(-0.02 + 0.002 * k, -0.01, 1.0)); };
+  TrackerOptions options;
+  const TrackResult coasted = FirstFrameBack(options, truth);
   EXPECT_EQ(coasted.status, TrackStatus::kTracking) << coasted.BriefReport();
   EXPECT_GT(coasted.summary.search_candidates, 1) << coasted.BriefReport();
   EXPECT_EQ(coasted.summary.search_choice, 0) << coasted.BriefReport();
@@ -304,43 +316,22 @@ TEST(TrackerFaults, AnObjectHiddenForFramesIsLookedForWhereItsMotionCarriedIt) {
   EXPECT_LT(e.rotation_rad, 2.0 * kDeg) << coasted.BriefReport();
   // Held at the last pose seen, the first candidate is that pose, 40 degrees off: another
   // candidate (on this plain scene, the correlation's) has to find the cube.
-  const TrackResult held = run(0);
+  options.failure.coast_frames = 0;
+  const TrackResult held = FirstFrameBack(options, truth);
   EXPECT_EQ(held.status, TrackStatus::kTracking) << held.BriefReport();
   EXPECT_GT(held.summary.search_choice, 0) << held.BriefReport();
 }
 
-TEST(TrackerFaults, AnObjectThatStoppedBehindAnOccluderIsLookedForTurnedInPlace) {
-  // The cube moves sideways 12 mm a frame while it turns; hidden from frame 6 on, it stops
-  // and goes on turning in place. When it shows again, 40 degrees turned, the coasted pose
-  // is 10 cm beside the cube: the coasted turn with the cube's centre held where it was
-  // last seen (the second candidate) finds it.
-  const Rig rig = testing::OneCameraRig();
-  const Mesh cube = MakeLetteredCube(0.096, 128);
-  const cv::Mat background = Background(rig.cameras[0].intrinsics, 5);
-  const Eigen::Vector3d axis = Eigen::Vector3d(0.6, 1.0, 0.3).normalized();
+TEST_F(HiddenTurningCube, ThatStoppedBehindAnOccluderIsLookedForTurnedInPlace) {
+  // The cube moves sideways 12 mm a frame while it turns; hidden, it stops and goes on
+  // turning in place. When it shows again, 40 degrees turned, the coasted pose is 10 cm
+  // beside the cube: the coasted turn with the cube's centre held where it was last seen
+  // (the second candidate) finds it.
   auto truth = [&](int k) {
-    return Rigid3d(ExpSO3(5.0 * kDeg * k * axis) * ExpSO3(Eigen::Vector3d(0.45, 0.7, 0.1)),
-                   Eigen::Vector3d(-0.03 + 0.012 * std::min(k, 5), -0.01, 1.0));
+    return Truth(k, Eigen::Vector3d(-0.03 + 0.012 * std::min(k, 5), -0.01, 1.0));
   };
-  auto run = [&](bool turn_in_place) {
-    TrackerOptions options;
-    options.reacquisition.turn_in_place = turn_in_place;
-    Tracker tracker(rig, cube, options);
-    tracker.Initialize(truth(0));
-    for (int k = 0; k < 14; ++k) {
-      const cv::Mat image =
-          k >= 6 ? background.clone()
-                 : testing::RenderOverBackground(cube, rig.cameras[0], truth(k), background);
-      const TrackResult r = tracker.Track({image});
-      if (k == 5) {
-        EXPECT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
-      }
-    }
-    EXPECT_EQ(tracker.status(), TrackStatus::kLost);
-    return tracker.Track(
-        {testing::RenderOverBackground(cube, rig.cameras[0], truth(14), background)});
-  };
-  const TrackResult found = run(true);
+  TrackerOptions options;
+  const TrackResult found = FirstFrameBack(options, truth);
   EXPECT_EQ(found.status, TrackStatus::kTracking) << found.BriefReport();
   EXPECT_EQ(found.summary.search_choice, 1) << found.BriefReport();
   const PoseDifference e = Difference(found.world_from_obj, truth(14));
@@ -348,7 +339,8 @@ TEST(TrackerFaults, AnObjectThatStoppedBehindAnOccluderIsLookedForTurnedInPlace)
   EXPECT_LT(e.rotation_rad, 2.0 * kDeg) << found.BriefReport();
   // Without that candidate the search tries one pose fewer, and none of them finds the cube
   // in this frame (the correlation's seeds are of the last pose seen, 40 degrees off).
-  const TrackResult without = run(false);
+  options.reacquisition.turn_in_place = false;
+  const TrackResult without = FirstFrameBack(options, truth);
   EXPECT_EQ(without.summary.search_candidates + 1, found.summary.search_candidates);
   EXPECT_EQ(without.status, TrackStatus::kLost) << without.BriefReport();
 }
