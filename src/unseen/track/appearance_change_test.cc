@@ -163,12 +163,14 @@ TEST_F(AppearanceChange, AnOccluderIsNotTakenForColoursThatNeverFitted) {
 TEST(AppearanceChangeOptions, ParsedAndChecked) {
   const TrackerOptions o = ParseTrackerOptions(
       "photometric: {dragged_weight: 0.2, light_change_fit: 0.4, "
-      "light_change_max_gathering: 0.6}\n"
+      "light_change_max_gathering: 0.6, start_by_silhouette: false}\n"
       "live_appearance: {poor_fit_share: 0.3, poor_fit_frames: 4, poor_fit_best_share: 0.5, "
       "poor_fit_confidence: 0.6}\n");
   EXPECT_EQ(o.photometric.dragged_weight, 0.2);
   EXPECT_EQ(o.photometric.light_change_fit, 0.4);
   EXPECT_EQ(o.photometric.light_change_max_gathering, 0.6);
+  EXPECT_FALSE(o.photometric.start_by_silhouette);
+  EXPECT_TRUE(TrackerOptions().photometric.start_by_silhouette);
   EXPECT_EQ(o.live_appearance.poor_fit_share, 0.3);
   EXPECT_EQ(o.live_appearance.poor_fit_frames, 4);
   EXPECT_EQ(o.live_appearance.poor_fit_best_share, 0.5);

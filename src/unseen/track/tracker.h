@@ -205,7 +205,11 @@ class Tracker {
   // start_drag_px); a model that fails them is tracked without the photometric modality. A
   // model without colours whose silhouette does not confirm the given pose takes the first
   // frame's colours seen from it (LiveAppearanceOptions::when_silhouette_fails).
+  // When that stays below FailureOptions::recover_confidence, the frame is aligned again
+  // from where the silhouette alone brings the given pose (start_by_silhouette).
   TrackResult AlignFirstFrame(const Frame& frame, const Rigid3d& given);
+  // AlignFirstFrame's alignment and checks at the given pose.
+  TrackResult AlignFirstFrameAt(const Frame& frame, const Rigid3d& given);
   // The confidence of an alignment: what the modalities vouch for, times the plausibility
   // of the object's on-screen area (FailureOptions::min_area_ratio).
   // `with_references` false: a coarse candidate's (LevelSpan::scoring), without the

@@ -120,6 +120,41 @@ bool Tracker::LightChanged(const SolveSummary& s, bool has_depth) const {
 TrackResult Tracker::AlignFirstFrame(const Frame& frame, const Rigid3d& given) {
   const std::vector<ColorHistograms> given_histograms = region_.histograms();
   const double given_recent_correction_px = recent_correction_px_;
+  const bool joint = use_photometric_ && options_.region.enabled;
+  TrackResult r = AlignFirstFrameAt(frame, given);
+  if (!joint || !use_photometric_ || !options_.photometric.start_by_silhouette ||
+      r.confidence >= options_.failure.recover_confidence) {
+    return r;
+  }
+  // The first frame did not confirm the given pose: it may be further off than the
+  // colours' basin (a pose from another tracker, a rough calibration). The silhouette's
+  // basin is wider: it aligns the frame first, and the joint alignment (with the colours'
+  // weight the checks above settled) starts from there; the more confident result is kept.
+  const std::vector<ColorHistograms> first_histograms = region_.histograms();
+  const double first_recent_correction_px = recent_correction_px_;
+  region_.set_histograms(given_histograms);
+  recent_correction_px_ = given_recent_correction_px;
+  use_photometric_ = false;
+  const TrackResult by_silhouette = AlignPredicted(frame, given);
+  use_photometric_ = true;
+  TrackResult again = AlignPredicted(frame, by_silhouette.world_from_obj);
+  again.summary.times += by_silhouette.summary.times;
+  again.summary.times += r.summary.times;
+  if (again.confidence > r.confidence) {
+    UNSEEN_LOG_INFO("tracker: the first frame aligned from the given pose reached confidence "
+                    "{:.2f}; aligned by the silhouette first, {:.2f}",
+                    r.confidence, again.confidence);
+    return again;
+  }
+  r.summary.times = again.summary.times;
+  region_.set_histograms(first_histograms);
+  recent_correction_px_ = first_recent_correction_px;
+  return r;
+}
+
+TrackResult Tracker::AlignFirstFrameAt(const Frame& frame, const Rigid3d& given) {
+  const std::vector<ColorHistograms> given_histograms = region_.histograms();
+  const double given_recent_correction_px = recent_correction_px_;
   TrackResult r = AlignPredicted(frame, given);
   const LiveAppearanceOptions& lo = options_.live_appearance;
   if (!live_appearance_ && lo.when_silhouette_fails && MayTakeLiveAppearance() &&

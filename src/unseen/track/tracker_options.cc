@@ -197,6 +197,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
        {{"enabled", YamlField(&ph.enabled)},
         {"require_appearance", YamlField(&ph.require_appearance)},
         {"min_start_fit", YamlField(&ph.min_start_fit)},
+        {"start_by_silhouette", YamlField(&ph.start_by_silhouette)},
         {"start_drag_px", YamlField(&ph.start_drag_px)},
         {"start_drag_ratio", YamlField(&ph.start_drag_ratio)},
         {"dragged_weight", YamlField(&ph.dragged_weight)},

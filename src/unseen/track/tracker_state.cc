@@ -88,6 +88,7 @@ TrackResult Tracker::Track(const Frame& input_frame) {
     r = AlignPredicted(frame, predicted);
     r.summary.times += first_times;
   }
+  const bool first_frame = learn_from_start_;
   learn_from_start_ = false;
   if (status_ == TrackStatus::kTracking && options_.reacquisition.seed_when_doubtful &&
       r.confidence < options_.reacquisition.doubtful_confidence) {
@@ -107,6 +108,11 @@ TrackResult Tracker::Track(const Frame& input_frame) {
   if (status_ == TrackStatus::kTracking) {
     if (bad_frames_ >= f.lost_after_frames) {
       BecomeLost(predicted);
+    } else if (first_frame && r.confidence >= f.lost_confidence) {
+      // The given pose was a guess, not where the object was a frame ago: the first
+      // frame's correction of it is no motion.
+      predictor_->Reset(r.world_from_obj);
+      last_good_ = r.world_from_obj;
     } else if (r.confidence >= f.lost_confidence) {
       predictor_->Correct(r.world_from_obj, r.confidence);  // weighed by the confidence
       last_good_ = r.world_from_obj;

@@ -262,6 +262,51 @@ TEST_F(TrackerScene, PartlyOccludedObjectStaysTrackedAndConfident) {
   }
 }
 
+TEST_F(TrackerScene, TheFirstFramesCorrectionOfTheGivenPoseIsNoMotion) {
+  // The cube stands still; the pose given for the first frame is 8 mm and 3 degrees off.
+  // The first frame brings it back; the motion model starts at rest there, so that the
+  // next frames are predicted where the cube is, not 8 mm further on.
+  Vector6d d;
+  d << 0.006, -0.004, 0.004, 2 * kDeg, -2 * kDeg, 0.0;
+  Tracker tracker(rig_, cube_);
+  tracker.Initialize(Perturb(truth_, d));
+  for (int k = 0; k < 3; ++k) {
+    const TrackResult r = tracker.Track({image_});
+    ASSERT_EQ(r.status, TrackStatus::kTracking) << "frame " << k << ": " << r.BriefReport();
+    EXPECT_LT(Difference(r.world_from_obj, truth_).translation, 0.001)
+        << "frame " << k << ": " << r.BriefReport();
+    EXPECT_LT(tracker.predictor().Velocity().head<3>().norm(), 0.01)
+        << "frame " << k << ": the first frame's correction was taken for motion";
+    EXPECT_LT(tracker.predictor().Velocity().tail<3>().norm(), 0.05)
+        << "frame " << k << ": the first frame's correction was taken for motion";
+  }
+}
+
+TEST_F(TrackerScene, AFirstFrameTheGivenPoseCannotAlignStartsFromTheSilhouettesPose) {
+  // One round per pyramid level: from a given pose 30 mm and 8 degrees off, the joint
+  // alignment of the first frame does not arrive. Aligned first by the silhouette (whose
+  // colour statistics pull the contour in from further away), then jointly from there, it
+  // does.
+  Vector6d d;
+  d << 0.006, 0.015, 0.045, 9 * kDeg, 6 * kDeg, -6 * kDeg;
+  TrackerOptions options;
+  options.pyramid.max_iterations_per_level = 1;
+  options.pyramid.coarse_max_iterations = 1;
+  auto first_frame = [&](bool start_by_silhouette) {
+    options.photometric.start_by_silhouette = start_by_silhouette;
+    Tracker tracker(rig_, cube_, options);
+    tracker.Initialize(Perturb(truth_, d));
+    return tracker.Track({image_});
+  };
+  const TrackResult from_given = first_frame(false);
+  EXPECT_LT(from_given.confidence, 0.5) << from_given.BriefReport();
+  const TrackResult r = first_frame(true);
+  EXPECT_GE(r.confidence, 0.5) << r.BriefReport();
+  EXPECT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
+  EXPECT_LT(Difference(r.world_from_obj, truth_).translation, 0.002) << r.BriefReport();
+  EXPECT_LT(Difference(r.world_from_obj, truth_).rotation_rad, 0.5 * kDeg) << r.BriefReport();
+}
+
 TEST_F(TrackerScene, PoseFarOutsideTheCaptureRangeGetsLowConfidence) {
   Tracker tracker(rig_, cube_);
   // Offsets far beyond what the pyramid brings back: the solve ends somewhere wrong.
