@@ -325,6 +325,7 @@ TEST_F(ModalityScene, ASilhouetteOffItsContourVouchesLess) {
   TrackerOptions unjudged;  // ratios no residual reaches
   unjudged.failure.good_region_residual_ratio = 1e3;
   unjudged.failure.bad_region_residual_ratio = 1e4;
+  unjudged.failure.silhouette_veto_ratio = 0.0;
   const double with_term = confidence_beside_twin(judged);
   const double without_term = confidence_beside_twin(unjudged);
   EXPECT_LT(with_term, 0.75 * without_term) << with_term << " vs " << without_term;

@@ -173,6 +173,13 @@ class Tracker {
   // share of its weight, the silhouette judging the frames.
   bool photometric_demoted() const { return use_photometric_ && photometric_demoted_; }
 
+  // The confidence of an alignment: what the modalities vouch for, times the plausibility
+  // of the object's on-screen area (FailureOptions::min_area_ratio), judged against what
+  // this tracker has learnt so far (residual and area references).
+  // `with_references` false: a coarse candidate's (LevelSpan::scoring), without the
+  // references learnt at full resolution (area, residual floors).
+  double Confidence(const SolveSummary& summary, bool with_references = true) const;
+
  private:
   struct CameraWork;
   // The frame with colour converted to CV_32FC3 and every image checked against its camera.
@@ -210,11 +217,6 @@ class Tracker {
   TrackResult AlignFirstFrame(const Frame& frame, const Rigid3d& given);
   // AlignFirstFrame's alignment and checks at the given pose.
   TrackResult AlignFirstFrameAt(const Frame& frame, const Rigid3d& given);
-  // The confidence of an alignment: what the modalities vouch for, times the plausibility
-  // of the object's on-screen area (FailureOptions::min_area_ratio).
-  // `with_references` false: a coarse candidate's (LevelSpan::scoring), without the
-  // references learnt at full resolution (area, residual floors).
-  double Confidence(const SolveSummary& summary, bool with_references = true) const;
   double ModalityConfidence(const SolveSummary& summary, bool with_references = true) const;
   // The photometric modality's own judgement of the alignment in [0, 1] (FailureOptions:
   // support, residual, convergence). `silhouette_term` in [0, 1], what the silhouette

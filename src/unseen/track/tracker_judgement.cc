@@ -77,8 +77,14 @@ double Tracker::ModalityConfidence(const SolveSummary& s, bool with_references) 
                           f.good_region_residual_ratio);
     }
   }
-  const double photometric =
+  double photometric =
       PhotometricJudges() ? PhotometricFit(s, with_references, region_term) : 0.0;
+  if (f.silhouette_veto_ratio > 0.0 && with_references && region_residual_reference_ > 0.0 &&
+      region_agreement >= 0.0 && s.region_counts.used >= f.min_region_lines) {
+    // A silhouette far off its contour contradicts what the texture vouches for.
+    photometric *= Ramp(RegionResidualRatio(s), f.silhouette_veto_ratio,
+                        f.bad_region_residual_ratio);
+  }
   const double depth_agreement = s.depth_counts.Agreement(options_.depth);
   if (depth_agreement < 0.0) {
     // Colours taken from the tracked frames vouch for the frame-to-frame fit only; the

@@ -59,6 +59,10 @@ void PyramidOptions::Check() const {
 void FailureOptions::Check() const {
   UNSEEN_CHECK(min_share >= 0.0 && good_share > min_share && good_share <= 1.0,
                "failure: need 0 <= min_share ({}) < good_share ({}) <= 1", min_share, good_share);
+  UNSEEN_CHECK(silhouette_veto_ratio == 0.0 || (silhouette_veto_ratio > bad_region_residual_ratio &&
+                                                 std::isfinite(silhouette_veto_ratio)),
+               "failure.silhouette_veto_ratio {} must be 0 or above bad_region_residual_ratio ({})",
+               silhouette_veto_ratio, bad_region_residual_ratio);
   UNSEEN_CHECK(good_region_residual_ratio >= 1.0 &&
                    bad_region_residual_ratio > good_region_residual_ratio &&
                    std::isfinite(bad_region_residual_ratio),
@@ -281,6 +285,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"min_pixels", YamlField(&fa.min_pixels)},
         {"good_region_residual_ratio", YamlField(&fa.good_region_residual_ratio)},
         {"bad_region_residual_ratio", YamlField(&fa.bad_region_residual_ratio)},
+        {"silhouette_veto_ratio", YamlField(&fa.silhouette_veto_ratio)},
         {"occluded_region_share", YamlField(&fa.occluded_region_share)},
         {"min_reference_region_residual", YamlField(&fa.min_reference_region_residual)},
         {"min_region_lines", YamlField(&fa.min_region_lines)},

@@ -171,6 +171,14 @@ struct FailureOptions {
   // contour (2-4x the reference; confident frames stay within 2x).
   double good_region_residual_ratio = 2.0;
   double bad_region_residual_ratio = 3.0;
+  // The texture judges a textured model's frames, but not against a silhouette that sits
+  // this many times its reference off its contour: the photometric confidence is ramped
+  // from 1 at bad_region_residual_ratio to 0 here (on at least min_region_lines lines).
+  // Without occlusion rejection, the white bar's frames were re-acquired 0.68 m off at 0.53
+  // (a residual of 11.7 standard deviations) and reported tracking for 80 frames (mean
+  // error 155 -> 3.1 mm); occluded objects, whose silhouettes are disturbed, stay within
+  // it. 0: never.
+  double silhouette_veto_ratio = 12.0;
   // Where the photometric selection found an occluder (SelectionCounts::occluded_gradient),
   // that residual is the RMS of this share of the silhouette's lines, those with the
   // smallest offsets: lines across a thin occluder that the texture's blocks missed (legs,

@@ -307,6 +307,32 @@ TEST_F(TrackerScene, AFirstFrameTheGivenPoseCannotAlignStartsFromTheSilhouettesP
   EXPECT_LT(Difference(r.world_from_obj, truth_).rotation_rad, 0.5 * kDeg) << r.BriefReport();
 }
 
+TEST_F(TrackerScene, ASilhouetteFarOffItsContourVetoesTheTexturesConfidence) {
+  // The textured cube tracked confidently; the same frame's summary with the silhouette's
+  // residual 20 times what the confident frames had: the texture alone no longer vouches.
+  auto confidences = [&](const TrackerOptions& options) {
+    Tracker tracker(rig_, cube_, options);
+    tracker.Initialize(truth_);
+    TrackResult r;
+    for (int k = 0; k < 4; ++k) r = tracker.Track({image_});
+    EXPECT_GT(r.summary.region_residual, 0.0) << r.BriefReport();
+    SolveSummary off_contour = r.summary;
+    off_contour.region_residual *= 20.0;
+    return std::make_pair(tracker.Confidence(r.summary), tracker.Confidence(off_contour));
+  };
+  TrackerOptions options;
+  const auto [tracked, vetoed] = confidences(options);
+  EXPECT_GT(tracked, 0.8);
+  EXPECT_LT(vetoed, 0.05);
+  options.failure.silhouette_veto_ratio = 0.0;
+  const auto [tracked_without, judged_by_texture] = confidences(options);
+  EXPECT_GT(judged_by_texture, 0.8);
+  EXPECT_DOUBLE_EQ(tracked_without, tracked);
+  EXPECT_THROW(ParseTrackerOptions("failure: {silhouette_veto_ratio: 2}\n"), Error);
+  EXPECT_EQ(ParseTrackerOptions("failure: {silhouette_veto_ratio: 0}\n").failure.silhouette_veto_ratio,
+            0.0);
+}
+
 TEST_F(TrackerScene, PoseFarOutsideTheCaptureRangeGetsLowConfidence) {
   Tracker tracker(rig_, cube_);
   // Offsets far beyond what the pyramid brings back: the solve ends somewhere wrong.
