@@ -6,7 +6,8 @@
 // modes (3.6), model scale error (Table 4.2), the five speeds (Table 4.3), occluders with
 // and without rejection (3.4), side light with and without LINF (3.2), and model size; and
 // each development sequence with one modality at a time (photometric, silhouette, depth)
-// against all of them.
+// against all of them; and every development and held-out sequence started from a first
+// pose off the ground truth (the "start" group).
 // Prints a table per group and writes every row to a JSON file.
 //
 //   tracker_benchmark [--data DIR] [--scenes DIR] [--work DIR] [--json FILE]
@@ -23,12 +24,14 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core/utility.hpp>
 #include <optional>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "unseen/eval/evaluation.h"
 #include "unseen/eval/sequence_poses.h"
+#include "unseen/geometry/rigid3.h"
 #include "unseen/io/sequence.h"
 #include "unseen/mesh/primitives.h"
 #include "unseen/synth/scene.h"
@@ -55,7 +58,7 @@ struct BenchArgs {
   // cameras; other recordings), comma-separated; default $UNSEEN_HELDOUT_SEQUENCES.
   std::string heldout_dirs;
   std::string groups =
-      "dev,heldout,modalities,synthetic,color,scale,speed,occlusion,linf,model_size,budget";
+      "dev,heldout,start,modalities,synthetic,color,scale,speed,occlusion,linf,model_size,budget";
   int max_frames = 0;  // 0 = all
   // Tracker options (YAML) every run starts from instead of the defaults, so that a
   // setting can be compared across all groups; empty: the defaults.
@@ -71,7 +74,24 @@ struct Run {
   std::function<Mesh(const Sequence&)> model;  // default: the sequence's own model
   int threads = 1;
   std::string thesis;  // the thesis's figure for this row, for comparison
+  // A first pose off the ground truth (the "start" group): moved start_offset_m in a random
+  // direction and turned start_turn_deg about a random axis through the model's origin,
+  // both drawn from start_seed; 0: the true first pose.
+  double start_offset_m = 0.0;
+  double start_turn_deg = 0.0;
+  unsigned start_seed = 0;
 };
+
+// `truth` moved `offset_m` along a random direction and turned `turn_deg` about a random
+// axis through the model's origin (world frame), both drawn from `seed`.
+Rigid3d OffStart(const Rigid3d& truth, double offset_m, double turn_deg, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> normal;
+  const Eigen::Vector3d direction(normal(rng), normal(rng), normal(rng));
+  const Eigen::Vector3d axis(normal(rng), normal(rng), normal(rng));
+  return Rigid3d(ExpSO3(axis.normalized() * (turn_deg * M_PI / 180.0)) * truth.rotation(),
+                 truth.translation() + direction.normalized() * offset_m);
+}
 
 struct RunOutcome {
   EvaluationResult eval;
@@ -105,7 +125,11 @@ RunOutcome Execute(const Run& run, int max_frames) {
   Tracker tracker(sequence.rig(), std::move(model), options);
   const auto start = sequence.GroundTruth(0);
   UNSEEN_CHECK(start.has_value(), "{}: frame 0 has no ground truth", run.sequence_dir);
-  tracker.Initialize(*start);
+  const bool off = run.start_offset_m > 0.0 || run.start_turn_deg > 0.0;
+  const Rigid3d first =
+      off ? OffStart(*start, run.start_offset_m, run.start_turn_deg, run.start_seed) : *start;
+  if (off) UNSEEN_LOG_INFO("{}: starts at {}", run.name, first.ToString());
+  tracker.Initialize(first);
 
   const int n =
       max_frames > 0 ? std::min(max_frames, sequence.num_frames()) : sequence.num_frames();
@@ -264,8 +288,9 @@ std::vector<Run> PlanRuns(const BenchArgs& args, const std::vector<std::string>&
       }
     }
   }
-  if (wanted("heldout")) {
-    // Sequences the tracker was not tuned on: defaults, one thread, from the true first pose.
+  // Sequences the tracker was not tuned on (--heldout folders).
+  auto heldout_sequences = [&]() {
+    std::vector<fs::path> dirs;
     std::string list = args.heldout_dirs;
     if (list.empty() && std::getenv("UNSEEN_HELDOUT_SEQUENCES")) {
       list = std::getenv("UNSEEN_HELDOUT_SEQUENCES");
@@ -279,8 +304,25 @@ std::vector<Run> PlanRuns(const BenchArgs& args, const std::vector<std::string>&
         UNSEEN_LOG_WARN("held-out folder {} not found: skipped", folder.string());
         continue;
       }
-      for (const fs::path& dir : DevSequences(folder.string())) {
-        add({"heldout", dir.filename().string(), dir.string(), defaults, {}, 1, ""});
+      for (const fs::path& dir : DevSequences(folder.string())) dirs.push_back(dir);
+    }
+    return dirs;
+  };
+  if (wanted("heldout")) {
+    // Defaults, one thread, from the true first pose.
+    for (const fs::path& dir : heldout_sequences()) {
+      add({"heldout", dir.filename().string(), dir.string(), defaults, {}, 1, ""});
+    }
+  }
+  if (wanted("start")) {
+    // Every development and held-out sequence from a first pose 8 mm and 4 degrees off the
+    // ground truth, three draws of the direction and axis.
+    std::vector<fs::path> dirs = have_dev ? DevSequences(args.data_dir) : std::vector<fs::path>();
+    for (const fs::path& dir : heldout_sequences()) dirs.push_back(dir);
+    for (const fs::path& dir : dirs) {
+      for (unsigned seed : {1u, 2u, 3u}) {
+        add({"start", fmt::format("{} 8mm/4° #{}", dir.filename().string(), seed), dir.string(),
+             defaults, {}, 1, "", 0.008, 4.0, seed});
       }
     }
   }
@@ -414,8 +456,9 @@ int Main(int argc, char** argv) {
                  "Comma-separated folders of held-out sequences (default: "
                  "$UNSEEN_HELDOUT_SEQUENCES); the heldout group runs each sequence in them");
   app.add_option("--groups", args.groups,
-                 "Comma-separated: dev,heldout,modalities,synthetic,color,scale,speed,occlusion,linf,"
-                 "model_size");
+                 "Comma-separated: dev,heldout,start,modalities,synthetic,color,scale,speed,"
+                 "occlusion,linf,model_size,budget (start: every development and held-out "
+                 "sequence from a first pose 8 mm and 4 degrees off, three draws)");
   app.add_option("--max-frames", args.max_frames, "Track at most N frames per run (0 = all)");
   app.add_option("--config", args.config_path,
                  "Tracker options (YAML) every run starts from (default: the built-in defaults)");
