@@ -217,6 +217,18 @@ class Tracker {
   TrackResult AlignFirstFrame(const Frame& frame, const Rigid3d& given);
   // AlignFirstFrame's alignment and checks at the given pose.
   TrackResult AlignFirstFrameAt(const Frame& frame, const Rigid3d& given);
+  // What an alignment leaves for the next frames (the region modality's colour statistics,
+  // the recent correction): saved before an alternative alignment is tried, restored when
+  // that one is not kept.
+  struct Learnt {
+    std::vector<ColorHistograms> histograms;
+    double recent_correction_px = 0.0;
+  };
+  Learnt SaveLearnt() const { return {region_.histograms(), recent_correction_px_}; }
+  void RestoreLearnt(const Learnt& learnt) {
+    region_.set_histograms(learnt.histograms);
+    recent_correction_px_ = learnt.recent_correction_px;
+  }
   double ModalityConfidence(const SolveSummary& summary, bool with_references = true) const;
   // The photometric modality's own judgement of the alignment in [0, 1] (FailureOptions:
   // support, residual, convergence). `silhouette_term` in [0, 1], what the silhouette

@@ -124,8 +124,7 @@ bool Tracker::LightChanged(const SolveSummary& s, bool has_depth) const {
 }
 
 TrackResult Tracker::AlignFirstFrame(const Frame& frame, const Rigid3d& given) {
-  const std::vector<ColorHistograms> given_histograms = region_.histograms();
-  const double given_recent_correction_px = recent_correction_px_;
+  const Learnt given_learnt = SaveLearnt();
   const bool joint = use_photometric_ && options_.region.enabled;
   TrackResult r = AlignFirstFrameAt(frame, given);
   if (!joint || !use_photometric_ || !options_.photometric.start_by_silhouette ||
@@ -136,10 +135,8 @@ TrackResult Tracker::AlignFirstFrame(const Frame& frame, const Rigid3d& given) {
   // colours' basin (a pose from another tracker, a rough calibration). The silhouette's
   // basin is wider: it aligns the frame first, and the joint alignment (with the colours'
   // weight the checks above settled) starts from there; the more confident result is kept.
-  const std::vector<ColorHistograms> first_histograms = region_.histograms();
-  const double first_recent_correction_px = recent_correction_px_;
-  region_.set_histograms(given_histograms);
-  recent_correction_px_ = given_recent_correction_px;
+  const Learnt first_learnt = SaveLearnt();
+  RestoreLearnt(given_learnt);
   use_photometric_ = false;
   const TrackResult by_silhouette = AlignPredicted(frame, given);
   use_photometric_ = true;
@@ -153,24 +150,20 @@ TrackResult Tracker::AlignFirstFrame(const Frame& frame, const Rigid3d& given) {
     return again;
   }
   r.summary.times = again.summary.times;
-  region_.set_histograms(first_histograms);
-  recent_correction_px_ = first_recent_correction_px;
+  RestoreLearnt(first_learnt);
   return r;
 }
 
 TrackResult Tracker::AlignFirstFrameAt(const Frame& frame, const Rigid3d& given) {
-  const std::vector<ColorHistograms> given_histograms = region_.histograms();
-  const double given_recent_correction_px = recent_correction_px_;
+  const Learnt given_learnt = SaveLearnt();
   TrackResult r = AlignPredicted(frame, given);
   const LiveAppearanceOptions& lo = options_.live_appearance;
   if (!live_appearance_ && lo.when_silhouette_fails && MayTakeLiveAppearance() &&
       r.confidence < lo.min_confidence) {
     // The silhouette alone does not confirm the given pose (an object coloured like its
     // surroundings): the object as the first frame shows it there may.
-    const std::vector<ColorHistograms> silhouette_histograms = region_.histograms();
-    const double silhouette_recent_correction_px = recent_correction_px_;
-    region_.set_histograms(given_histograms);
-    recent_correction_px_ = given_recent_correction_px;
+    const Learnt silhouette_learnt = SaveLearnt();
+    RestoreLearnt(given_learnt);
     if (TakeLiveAppearance(frame, given)) {
       live_appearance_ = true;
       TrackResult with_colours = AlignPredicted(frame, given);
@@ -185,8 +178,7 @@ TrackResult Tracker::AlignFirstFrameAt(const Frame& frame, const Rigid3d& given)
       StartWithGivenModel();  // back to the model's own (no) colours
       r.summary.times = with_colours.summary.times;
     }
-    region_.set_histograms(silhouette_histograms);
-    recent_correction_px_ = silhouette_recent_correction_px;
+    RestoreLearnt(silhouette_learnt);
     return r;
   }
   const RegionModalityOptions& ro = options_.region;
@@ -215,8 +207,7 @@ TrackResult Tracker::AlignFirstFrameAt(const Frame& frame, const Rigid3d& given)
   // drags the object away, typically deeper; the silhouette alone does not.
   // What the joint alignment left for the next frames (its correction, the colour samples
   // it learnt) is kept unless the silhouette's result replaces it.
-  const double joint_recent_correction_px = recent_correction_px_;
-  const std::vector<ColorHistograms> joint_histograms = region_.histograms();
+  const Learnt joint_learnt = SaveLearnt();
   use_photometric_ = false;
   TrackResult by_silhouette = AlignPredicted(frame, given);
   use_photometric_ = true;
@@ -245,8 +236,7 @@ TrackResult Tracker::AlignFirstFrameAt(const Frame& frame, const Rigid3d& given)
     demoted.summary.times += silhouette_times;
     return demoted;
   }
-  recent_correction_px_ = joint_recent_correction_px;
-  region_.set_histograms(joint_histograms);
+  RestoreLearnt(joint_learnt);
   r.summary.times += by_silhouette.summary.times;
   return r;
 }

@@ -108,13 +108,14 @@ TrackResult Tracker::Track(const Frame& input_frame) {
   if (status_ == TrackStatus::kTracking) {
     if (bad_frames_ >= f.lost_after_frames) {
       BecomeLost(predicted);
-    } else if (first_frame && r.confidence >= f.lost_confidence) {
-      // The given pose was a guess, not where the object was a frame ago: the first
-      // frame's correction of it is no motion.
-      predictor_->Reset(r.world_from_obj);
-      last_good_ = r.world_from_obj;
     } else if (r.confidence >= f.lost_confidence) {
-      predictor_->Correct(r.world_from_obj, r.confidence);  // weighed by the confidence
+      if (first_frame) {
+        // The given pose was a guess, not where the object was a frame ago: the first
+        // frame's correction of it is no motion.
+        predictor_->Reset(r.world_from_obj);
+      } else {
+        predictor_->Correct(r.world_from_obj, r.confidence);  // weighed by the confidence
+      }
       last_good_ = r.world_from_obj;
     }
   } else if (r.confidence >= f.recover_confidence) {
