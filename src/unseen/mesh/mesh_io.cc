@@ -141,8 +141,18 @@ class TextureLoader {
   std::map<std::string, cv::Mat> cache_;
 };
 
+// An assimp colour as BGR clamped to [0, 1]; its callers reject colours that are not numbers.
+Eigen::Vector3f ClampedBgr(const aiColor4D& colour) {
+  return Eigen::Vector3f(colour.b, colour.g, colour.r).cwiseMax(0.0f).cwiseMin(1.0f);
+}
+
+bool HasNaN(const aiColor4D& colour) {
+  return std::isnan(colour.r) || std::isnan(colour.g) || std::isnan(colour.b);
+}
+
 // Converts assimp material `index` to a Material with its diffuse colour and texture.
-Material ConvertMaterial(const aiScene& scene, unsigned index, TextureLoader* textures) {
+Material ConvertMaterial(const aiScene& scene, unsigned index, TextureLoader* textures,
+                         const std::string& path) {
   const aiMaterial& in = *scene.mMaterials[index];
   Material out;
   aiString name;
@@ -151,7 +161,9 @@ Material ConvertMaterial(const aiScene& scene, unsigned index, TextureLoader* te
   aiColor4D colour;
   if (in.Get(AI_MATKEY_COLOR_DIFFUSE, colour) == AI_SUCCESS ||
       in.Get(AI_MATKEY_BASE_COLOR, colour) == AI_SUCCESS) {
-    out.diffuse_bgr = Eigen::Vector3f(colour.b, colour.g, colour.r).cwiseMax(0.0f).cwiseMin(1.0f);
+    UNSEEN_CHECK(!HasNaN(colour), "{}: material '{}' has diffuse colour (r g b) = ({} {} {})",
+                 path, out.name, colour.r, colour.g, colour.b);
+    out.diffuse_bgr = ClampedBgr(colour);
   }
   for (aiTextureType type : {aiTextureType_DIFFUSE, aiTextureType_BASE_COLOR}) {
     if (in.GetTextureCount(type) == 0) continue;
@@ -592,7 +604,7 @@ Mesh LoadMesh(const std::string& path, double scale_to_metres) {
     if (sub.mMaterialIndex < scene->mNumMaterials) {
       auto it = material_index.find(sub.mMaterialIndex);
       if (it == material_index.end()) {
-        mesh.materials.push_back(ConvertMaterial(*scene, sub.mMaterialIndex, &textures));
+        mesh.materials.push_back(ConvertMaterial(*scene, sub.mMaterialIndex, &textures, path));
         const int ours = static_cast<int>(mesh.materials.size()) - 1;
         it = material_index.emplace(sub.mMaterialIndex, ours).first;
       }
@@ -620,7 +632,9 @@ Mesh LoadMesh(const std::string& path, double scale_to_metres) {
       }
       if (has_colours) {
         const aiColor4D& c = sub.mColors[0][v];
-        mesh.colors_bgr.push_back(Eigen::Vector3f(c.b, c.g, c.r).cwiseMax(0.0f).cwiseMin(1.0f));
+        UNSEEN_CHECK(!HasNaN(c), "{}: sub-mesh {} vertex {} has colour (r g b) = ({} {} {})", path,
+                     mi, v, c.r, c.g, c.b);
+        mesh.colors_bgr.push_back(ClampedBgr(c));
       } else {
         mesh.colors_bgr.emplace_back(1.0f, 1.0f, 1.0f);
       }

@@ -652,9 +652,9 @@ TEST_F(MeshIoTest, GltfExternalTexture) {
 }
 
 // A triangle with per-vertex colours (COLOR_0) and a material with a base colour factor.
-std::string ColouredTriangleGltf() {
+std::string ColouredTriangleGltf(
+    const std::vector<float>& colours = {1, 0, 0, 0, 1, 0, 0, 0, 1}) {  // RGB per vertex
   const std::vector<float> positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
-  const std::vector<float> colours = {1, 0, 0, 0, 1, 0, 0, 0, 1};  // RGB
   std::vector<unsigned char> buffer;
   Append(&buffer, positions);
   Append(&buffer, colours);
@@ -687,6 +687,12 @@ TEST_F(MeshIoTest, GltfVertexColoursAndBaseColour) {
                                                     : Eigen::Vector3f(0, 0, 1);
     EXPECT_TRUE(mesh.colors_bgr[v].isApprox(expected, 1e-5f)) << mesh.colors_bgr[v].transpose();
   }
+}
+
+TEST_F(MeshIoTest, AVertexColourThatIsNotANumberIsAnError) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::string path = Write("nan.gltf", ColouredTriangleGltf({1, 0, 0, 0, nan, nan, 0, 0, 1}));
+  ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "vertex 1", "colour"});
 }
 
 // Loads `source` with assimp and writes it with assimp's exporter `format_id`.
