@@ -15,6 +15,7 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -227,6 +228,18 @@ size_t AfterCountAttribute(std::string_view text, size_t at) {
   return i + 1;
 }
 
+// The value of the count attribute whose name starts at `at` in `text`, trimmed, or
+// std::nullopt when no quoted count attribute starts there.
+std::optional<std::string> CountAttributeValue(std::string_view text, size_t at) {
+  size_t i = AfterCountAttribute(text, at);
+  if (i == std::string::npos) return std::nullopt;
+  while (i < text.size() && IsBlank(text[i])) ++i;
+  if (i >= text.size() || (text[i] != '"' && text[i] != '\'')) return std::nullopt;
+  const size_t close = text.find(text[i], i + 1);
+  if (close == std::string::npos) return std::nullopt;
+  return Trim(std::string(text.substr(i + 1, close - i - 1)));
+}
+
 // The range of a PLY integer type; +-infinity for the floating-point types.
 std::pair<double, double> IntegerRange(const std::string& type) {
   if (type == "char" || type == "int8") return {-128.0, 127.0};
@@ -243,10 +256,10 @@ std::pair<double, double> IntegerRange(const std::string& type) {
 }  // namespace
 
 // Collada: a <p> index list holding anything but integers and blanks makes assimp loop for
-// ever, a data array without a count attribute makes it dereference a null pointer, and a
-// count="N" attribute has it reserve memory for N values before it looks at them. Counts
-// are checked against the file's size (every value takes at least a byte), so that a short
-// file cannot ask for gigabytes.
+// ever, a data array without a count attribute or with count="0" makes it dereference a
+// null pointer, and a count="N" attribute has it reserve memory for N values before it
+// looks at them. Counts are checked against the file's size (every value takes at least a
+// byte), so that a short file cannot ask for gigabytes.
 void CheckColladaText(const std::string& path) {
   const std::string text = ReadText(path);
   for (const char* array : {"<float_array", "<int_array", "<bool_array", "<Name_array",
@@ -254,22 +267,21 @@ void CheckColladaText(const std::string& path) {
     for (size_t at = text.find(array); at != std::string::npos; at = text.find(array, at + 1)) {
       const std::string_view tag =
           std::string_view(text).substr(at, text.find('>', at) - at);  // to the end if no '>'
-      bool counted = false;
-      for (size_t c = tag.find("count"); c != std::string::npos && !counted;
+      std::optional<std::string> count;
+      for (size_t c = tag.find("count"); c != std::string::npos && !count;
            c = tag.find("count", c + 1)) {
-        counted = AfterCountAttribute(tag, c) != std::string::npos;
+        count = CountAttributeValue(tag, c);
       }
-      UNSEEN_CHECK(counted, "{}: {}> element without a count attribute", path, array);
+      UNSEEN_CHECK(count, "{}: {}> element without a count attribute", path, array);
+      // An empty array makes assimp dereference a null pointer when it is read.
+      UNSEEN_CHECK(count->find_first_not_of("0xX") != std::string::npos,
+                   "{}: {}> element with count=\"{}\": no values", path, array, *count);
     }
   }
   for (size_t at = text.find("count"); at != std::string::npos; at = text.find("count", at + 1)) {
-    size_t i = AfterCountAttribute(text, at);
-    if (i == std::string::npos) continue;
-    while (i < text.size() && IsBlank(text[i])) ++i;
-    if (i >= text.size() || (text[i] != '"' && text[i] != '\'')) continue;
-    const size_t close = text.find(text[i], i + 1);
-    if (close == std::string::npos) continue;
-    const std::string value = Trim(text.substr(i + 1, close - i - 1));
+    const std::optional<std::string> counted = CountAttributeValue(text, at);
+    if (!counted) continue;
+    const std::string& value = *counted;
     // Decimal or 0x-hexadecimal, as assimp's XML reader takes them; a sign wraps around.
     const bool hex = value.rfind("0x", 0) == 0 || value.rfind("0X", 0) == 0;
     const std::string digits = hex ? value.substr(2) : value;
@@ -296,9 +308,11 @@ void CheckColladaText(const std::string& path) {
 }
 
 // glTF: assimp parses the JSON recursively, so that deeply nested input exhausts the
-// stack, and allocates what a .glb file's header says before it reads it. The nesting of a
-// .gltf file, or of a .glb file's JSON chunk, and the lengths in a .glb header are checked
-// first.
+// stack, allocates what a .glb file's header says before it reads it, and takes an image's
+// file extension from after the '/' of its media type without checking there is one (a
+// "data:png;base64,..." URI or "mimeType": "png" crashes it). The nesting of a .gltf file,
+// or of a .glb file's JSON chunk, the lengths in a .glb header and the media types are
+// checked first.
 void CheckGltfText(const std::string& path, bool binary) {
   constexpr int kMaxDepth = 64;
   const std::string text = ReadText(path);
@@ -333,6 +347,29 @@ void CheckGltfText(const std::string& path, bool binary) {
       --depth;
     }
   }
+  // The string starting at `at` (after its opening quote), up to its closing quote.
+  const auto string_at = [&](size_t at) {
+    size_t end = at;
+    while (end < json.size() && json[end] != '"') end += json[end] == '\\' ? 2 : 1;
+    return json.substr(at, std::min(end, json.size()) - at);
+  };
+  const auto check_media_type = [&](std::string_view type, std::string_view where) {
+    UNSEEN_CHECK(type.empty() || type.find('/') != std::string_view::npos,
+                 "{}: {} has media type '{}', expected type/subtype (e.g. image/png)", path,
+                 where, type.substr(0, 40));
+  };
+  for (size_t at = json.find("\"data:"); at != std::string_view::npos;
+       at = json.find("\"data:", at + 1)) {
+    const std::string_view uri = string_at(at + 1);
+    const std::string_view type = uri.substr(5, uri.find_first_of(";,", 5) - 5);
+    check_media_type(type, "a data: URI");
+  }
+  for (size_t at = json.find("\"mimeType\""); at != std::string_view::npos;
+       at = json.find("\"mimeType\"", at + 1)) {
+    size_t i = at + 10;
+    while (i < json.size() && (IsBlank(json[i]) || json[i] == ':')) ++i;
+    if (i < json.size() && json[i] == '"') check_media_type(string_at(i + 1), "a mimeType");
+  }
 }
 
 // Throws naming the file for faces without indices, indices out of range and non-finite
@@ -365,7 +402,8 @@ void CheckRawScene(const aiScene& scene, const std::string& path) {
 }
 
 // Reads the body of a PLY before assimp does: checks that every list has at most 1e6
-// entries (assimp allocates what an ASCII list count says, 32 GB for "42949672950") and
+// entries (assimp allocates what an ASCII list count says, 32 GB for "42949672950"), that
+// every value fits its type, and
 // returns the face texcoords, or std::nullopt when the faces have none. Throws naming the
 // file for a header or body it cannot parse.
 std::optional<PlyFaceTexcoords> ReadPlyBody(const std::string& path) {
@@ -441,11 +479,24 @@ std::optional<PlyFaceTexcoords> ReadPlyBody(const std::string& path) {
   }
   UNSEEN_CHECK(header_done, "{}: PLY header has no end_header", path);
 
+  // ASCII: each element instance is one line, as assimp parses them, so that a value is
+  // checked as the property assimp will read it as.
+  std::istringstream instance;
+  auto next_instance = [&](const Element& e, int64_t i) {
+    std::string text;
+    UNSEEN_CHECK(std::getline(in, text), "{}: PLY body ends early, at {} {}", path, e.name, i);
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    instance.clear();
+    instance.str(text);
+  };
   auto read_value = [&](const std::string& type) -> double {
     if (format == Format::kAscii) {
       double value;
-      in >> value;
-      UNSEEN_CHECK(!in.fail(), "{}: PLY body ends early or holds a non-number", path);
+      instance >> value;
+      UNSEEN_CHECK(!instance.fail(),
+                   "{}: PLY line '{}' holds a non-number or fewer values than its element's "
+                   "properties",
+                   path, instance.str().substr(0, 80));
       // assimp converts integers with wrap-around: a count or index beyond its type's range
       // becomes an arbitrary (e.g. gigabyte) size.
       const auto [lo, hi] = IntegerRange(type);
@@ -487,6 +538,7 @@ std::optional<PlyFaceTexcoords> ReadPlyBody(const std::string& path) {
       continue;
     }
     for (int64_t i = 0; i < e.count; ++i) {
+      if (format == Format::kAscii) next_instance(e, i);
       std::vector<int64_t> indices;
       std::vector<double> texcoords;
       for (const Property& p : e.properties) {

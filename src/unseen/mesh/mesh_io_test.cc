@@ -554,6 +554,22 @@ TEST_F(MeshIoTest, BadInputThrowsNamingTheFile) {
   EXPECT_THROW(LoadMesh(good, std::nan("")), Error);
 }
 
+// ASCII PLY elements are one per line: a face list count on a line of its own is read as
+// the count it is (and rejected when it does not fit its type), not as a coordinate.
+TEST_F(MeshIoTest, AsciiPlyValuesAreReadLineByLine) {
+  const std::string face = std::string(kPlyHeader3) +
+                           "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string short_line = Write("short.ply", face + "0 0 0\n1 0\n0\n1 0\n3 0 1 2\n");
+  ExpectThrowsMentioning([&] { LoadMesh(short_line); }, {short_line, "1 0"});
+  const std::string huge_count =
+      Write("huge.ply", face + "0 0 0\n1 0 0\n0 1\n318446744073709551616 0 1 2\n");
+  ExpectThrowsMentioning([&] { LoadMesh(huge_count); }, {huge_count});
+  const std::string blank_line = Write("blank.ply", face + "0 0 0\n\n1 0 0\n0 1 0\n3 0 1 2\n");
+  ExpectThrowsMentioning([&] { LoadMesh(blank_line); }, {blank_line});
+  const std::string crlf = Write("crlf.ply", face + "0 0 0\r\n1 0 0\r\n0 1 0\r\n3 0 1 2\r\n");
+  EXPECT_EQ(LoadMesh(crlf).num_triangles(), 1);
+}
+
 TEST_F(MeshIoTest, NanVertexInObj) {
   const std::string path = Write("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
   ExpectThrowsMentioning([&] { LoadMesh(path); }, {path});
@@ -641,6 +657,13 @@ TEST_F(MeshIoTest, GltfEmbeddedTextureAndNodeTransform) {
   ExpectQuadTopRed(mesh, 5.0f);
   EXPECT_EQ(mesh.materials[0].name, "painted");
   EXPECT_EQ(mesh.materials[0].texture_path, "");  // embedded: no file of its own
+}
+
+TEST_F(MeshIoTest, GltfImageMediaTypeWithoutSubtypeIsAnError) {
+  std::vector<unsigned char> png;
+  cv::imencode(".png", TopRedBottomBlue(), png);
+  const std::string path = Write("quad.gltf", QuadGltf("data:imagepng;base64," + Base64(png)));
+  ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "imagepng"});
 }
 
 TEST_F(MeshIoTest, GltfExternalTexture) {
@@ -735,6 +758,20 @@ TEST_F(MeshIoTest, ColladaKeepsFileAxesAndAppliesUnit) {
   mesh.BoundingBox(&lo, &hi);
   EXPECT_TRUE(lo.isApprox(Eigen::Vector3f::Zero()) || lo.norm() < 1e-7f) << lo.transpose();
   EXPECT_TRUE(hi.isApprox(Eigen::Vector3f(0.01f, 0.02f, 0.03f), 1e-5f)) << hi.transpose();
+}
+
+TEST_F(MeshIoTest, ColladaDataArrayWithoutValuesIsAnError) {
+  const std::string obj = Write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 2 0\nf 1 2 3\n");
+  AssimpConvert(obj, "collada", Path("t.dae"));
+  std::ifstream in(Path("t.dae"));
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  const size_t array = text.find("<float_array");
+  ASSERT_NE(array, std::string::npos);
+  const size_t count = text.find("count=\"", array);
+  ASSERT_NE(count, std::string::npos);
+  text.replace(count, text.find('"', count + 7) + 1 - count, "count=\"0\"");
+  const std::string path = Write("empty_array.dae", text);
+  ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "count=\"0\""});
 }
 
 // ---------------------------------------------------------------------------------------
