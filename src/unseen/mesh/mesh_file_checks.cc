@@ -218,26 +218,39 @@ namespace {
 
 bool IsBlank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
 
-// Position just after `count =` in `text` at `at` (where "count" starts), or npos when no
-// count attribute starts there.
-size_t AfterCountAttribute(std::string_view text, size_t at) {
+// Position just after `<name> =` in `text` at `at` (where the name starts), or npos when no
+// attribute of that name starts there.
+size_t AfterAttribute(std::string_view text, size_t at, std::string_view name) {
   if (at == 0 || !IsBlank(text[at - 1])) return std::string::npos;  // <vcount>, "account", ...
-  size_t i = at + 5;
+  size_t i = at + name.size();
   while (i < text.size() && IsBlank(text[i])) ++i;
   if (i >= text.size() || text[i] != '=') return std::string::npos;
   return i + 1;
 }
 
-// The value of the count attribute whose name starts at `at` in `text`, trimmed, or
-// std::nullopt when no quoted count attribute starts there.
-std::optional<std::string> CountAttributeValue(std::string_view text, size_t at) {
-  size_t i = AfterCountAttribute(text, at);
+// The value of the attribute `name` starting at `at` in `text`, trimmed, or std::nullopt
+// when no quoted attribute of that name starts there.
+std::optional<std::string> AttributeValue(std::string_view text, size_t at,
+                                          std::string_view name) {
+  size_t i = AfterAttribute(text, at, name);
   if (i == std::string::npos) return std::nullopt;
   while (i < text.size() && IsBlank(text[i])) ++i;
   if (i >= text.size() || (text[i] != '"' && text[i] != '\'')) return std::nullopt;
   const size_t close = text.find(text[i], i + 1);
   if (close == std::string::npos) return std::nullopt;
   return Trim(std::string(text.substr(i + 1, close - i - 1)));
+}
+
+// Whether `value` is a decimal or 0x-hexadecimal number, as assimp's XML reader takes them
+// (a sign wraps around), of at most `limit`.
+bool IsNumberUpTo(const std::string& value, size_t limit) {
+  const bool hex = value.rfind("0x", 0) == 0 || value.rfind("0X", 0) == 0;
+  const std::string digits = hex ? value.substr(2) : value;
+  const bool plain = !digits.empty() && digits.size() <= 12 &&
+                     std::all_of(digits.begin(), digits.end(), [&](unsigned char c) {
+                       return hex ? std::isxdigit(c) != 0 : std::isdigit(c) != 0;
+                     });
+  return plain && std::stoull(digits, nullptr, hex ? 16 : 10) <= limit;
 }
 
 // The range of a PLY integer type; +-infinity for the floating-point types.
@@ -257,9 +270,10 @@ std::pair<double, double> IntegerRange(const std::string& type) {
 
 // Collada: a <p> index list holding anything but integers and blanks makes assimp loop for
 // ever, a data array without a count attribute or with count="0" makes it dereference a
-// null pointer, and a count="N" attribute has it reserve memory for N values before it
-// looks at them. Counts are checked against the file's size (every value takes at least a
-// byte), so that a short file cannot ask for gigabytes.
+// null pointer, a count="N" attribute or a polygon size in <vcount> has it reserve memory
+// for N values before it looks at them, and a huge stride or offset overflows its index
+// arithmetic. These numbers are checked against the file's size (every value takes at
+// least a byte), so that a short file cannot ask for gigabytes.
 void CheckColladaText(const std::string& path) {
   const std::string text = ReadText(path);
   for (const char* array : {"<float_array", "<int_array", "<bool_array", "<Name_array",
@@ -270,7 +284,7 @@ void CheckColladaText(const std::string& path) {
       std::optional<std::string> count;
       for (size_t c = tag.find("count"); c != std::string::npos && !count;
            c = tag.find("count", c + 1)) {
-        count = CountAttributeValue(tag, c);
+        count = AttributeValue(tag, c, "count");
       }
       UNSEEN_CHECK(count, "{}: {}> element without a count attribute", path, array);
       // An empty array makes assimp dereference a null pointer when it is read.
@@ -278,20 +292,25 @@ void CheckColladaText(const std::string& path) {
                    "{}: {}> element with count=\"{}\": no values", path, array, *count);
     }
   }
-  for (size_t at = text.find("count"); at != std::string::npos; at = text.find("count", at + 1)) {
-    const std::optional<std::string> counted = CountAttributeValue(text, at);
-    if (!counted) continue;
-    const std::string& value = *counted;
-    // Decimal or 0x-hexadecimal, as assimp's XML reader takes them; a sign wraps around.
-    const bool hex = value.rfind("0x", 0) == 0 || value.rfind("0X", 0) == 0;
-    const std::string digits = hex ? value.substr(2) : value;
-    const bool plain = !digits.empty() && digits.size() <= 12 &&
-                       std::all_of(digits.begin(), digits.end(), [&](unsigned char c) {
-                         return hex ? std::isxdigit(c) != 0 : std::isdigit(c) != 0;
-                       });
-    UNSEEN_CHECK(plain && std::stoull(digits, nullptr, hex ? 16 : 10) <= text.size(),
-                 "{}: count=\"{}\" is not a number of values the file can hold ({} bytes)", path,
-                 value, text.size());
+  for (const std::string_view name : {"count", "stride", "offset"}) {
+    for (size_t at = text.find(name); at != std::string::npos; at = text.find(name, at + 1)) {
+      const std::optional<std::string> value = AttributeValue(text, at, name);
+      UNSEEN_CHECK(!value || IsNumberUpTo(*value, text.size()),
+                   "{}: {}=\"{}\" is not a number of values the file can hold ({} bytes)", path,
+                   name, *value, text.size());
+    }
+  }
+  // Polygon sizes: assimp reserves what they say.
+  for (size_t at = text.find("<vcount>"); at != std::string::npos;
+       at = text.find("<vcount>", at + 1)) {
+    const size_t begin = at + 8, end = std::min(text.find('<', begin), text.size());
+    std::istringstream sizes(text.substr(begin, end - begin));
+    std::string size;
+    while (sizes >> size) {
+      UNSEEN_CHECK(IsNumberUpTo(size, text.size()),
+                   "{}: <vcount> holds '{}', not a polygon size the file can hold ({} bytes)",
+                   path, size.substr(0, 20), text.size());
+    }
   }
   for (size_t at = text.find("<p"); at != std::string::npos; at = text.find("<p", at + 1)) {
     const size_t name_end = at + 2;

@@ -43,6 +43,10 @@ class MeshIoTest : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir_); }
 
   std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string ReadFile(const std::string& path) const {
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), {});
+  }
   std::string Write(const std::string& name, const std::string& text) const {
     std::ofstream(Path(name), std::ios::binary) << text;
     return Path(name);
@@ -763,8 +767,7 @@ TEST_F(MeshIoTest, ColladaKeepsFileAxesAndAppliesUnit) {
 TEST_F(MeshIoTest, ColladaDataArrayWithoutValuesIsAnError) {
   const std::string obj = Write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 2 0\nf 1 2 3\n");
   AssimpConvert(obj, "collada", Path("t.dae"));
-  std::ifstream in(Path("t.dae"));
-  std::string text((std::istreambuf_iterator<char>(in)), {});
+  std::string text = ReadFile(Path("t.dae"));
   const size_t array = text.find("<float_array");
   ASSERT_NE(array, std::string::npos);
   const size_t count = text.find("count=\"", array);
@@ -772,6 +775,14 @@ TEST_F(MeshIoTest, ColladaDataArrayWithoutValuesIsAnError) {
   text.replace(count, text.find('"', count + 7) + 1 - count, "count=\"0\"");
   const std::string path = Write("empty_array.dae", text);
   ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "count=\"0\""});
+
+  // A stride whose index arithmetic wraps around.
+  text = ReadFile(Path("t.dae"));
+  const size_t stride = text.find("stride=\"");
+  ASSERT_NE(stride, std::string::npos);
+  text.replace(stride, text.find('"', stride + 8) + 1 - stride, "stride=\"4294967296\"");
+  const std::string huge_stride = Write("huge_stride.dae", text);
+  ExpectThrowsMentioning([&] { LoadMesh(huge_stride); }, {huge_stride, "stride"});
 }
 
 // ---------------------------------------------------------------------------------------
