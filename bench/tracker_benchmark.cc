@@ -105,6 +105,10 @@ struct RunOutcome {
   // Median Tracker::Track time of the frames it returned tracked, and of those it returned
   // lost (the re-acquisition searches), frame 0 left out; 0 when there are none.
   double median_tracked_ms = 0, median_lost_ms = 0;
+  // Median time of the frames that began lost, so that Track ran a re-acquisition search,
+  // whether or not it found the object (one that does is returned tracked); 0 when none.
+  double median_search_ms = 0;
+  int search_frames = 0;
 };
 
 double Median(std::vector<double> values) {
@@ -134,7 +138,8 @@ RunOutcome Execute(const Run& run, int max_frames) {
   const int n =
       max_frames > 0 ? std::min(max_frames, sequence.num_frames()) : sequence.num_frames();
   RunOutcome out;
-  std::vector<double> tracked_ms, lost_ms;
+  std::vector<double> tracked_ms, lost_ms, search_ms;
+  bool began_lost = false;  // the previous frame was returned lost: this one searches
   SequenceFrameSource source(&sequence);
   SessionOptions session_options;
   session_options.name = run.name;
@@ -154,11 +159,15 @@ RunOutcome Execute(const Run& run, int max_frames) {
         if (frame.frame_id > 0) {
           (step.track->status == TrackStatus::kTracking ? tracked_ms : lost_ms)
               .push_back(step.track->summary.times.total_ms);
+          if (began_lost) search_ms.push_back(step.track->summary.times.total_ms);
         }
+        began_lost = step.track->status != TrackStatus::kTracking;
         return true;
       });
   out.median_tracked_ms = Median(tracked_ms);
   out.median_lost_ms = Median(lost_ms);
+  out.median_search_ms = Median(search_ms);
+  out.search_frames = static_cast<int>(search_ms.size());
   const std::vector<PoseRecord>& poses = summary.records;
   std::vector<GroundTruthFrame> truth = SequenceGroundTruth(sequence);
   truth.resize(std::min<size_t>(truth.size(), n));
@@ -199,6 +208,12 @@ nlohmann::json ToJson(const Run& run, const RunOutcome& o) {
   j["lost_frame_cost_ratio"] = o.median_tracked_ms > 0.0 && o.median_lost_ms > 0.0
                                    ? nlohmann::json(o.median_lost_ms / o.median_tracked_ms)
                                    : nlohmann::json(nullptr);
+  j["search_frames"] = o.search_frames;
+  j["median_ms_search_frame"] = o.median_search_ms;
+  // The same for the frames that ran a search, including those that found the object.
+  j["search_frame_cost_ratio"] = o.median_tracked_ms > 0.0 && o.median_search_ms > 0.0
+                                     ? nlohmann::json(o.median_search_ms / o.median_tracked_ms)
+                                     : nlohmann::json(nullptr);
   j["stage_ms"] = {{"predict", o.mean_times.predict_ms},   {"render", o.mean_times.render_ms},
                    {"preprocess", o.mean_times.preprocess_ms},
                    {"select", o.mean_times.select_ms}, {"solve", o.mean_times.solve_ms},

@@ -454,6 +454,27 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
   const TrackerOptions& options = tracker_.options();
   const ReacquisitionOptions& o = options.reacquisition;
   StageTimes times;
+  // The coasted pose is scored first: an object that comes out from behind an occluder is
+  // most likely where it went on moving. When it scores at least accept_coasted_score at
+  // the coarse levels, it is refined at once and, if that re-acquires the object, the
+  // search ends there (no correlation, no other candidate).
+  const int levels = tracker_.NumLevelsFor(last_good);
+  const int finest = std::max(0, levels - o.score_levels);
+  TrackResult coasted_scored = AlignCoarse(images, finest, levels - finest, coasted);
+  times += coasted_scored.summary.times;
+  if (finest > 0 && coasted_scored.world_from_obj.IsValid() &&
+      coasted_scored.confidence >= o.accept_coasted_score) {
+    TrackResult r = tracker_.Align(frame, coasted_scored.world_from_obj, levels);
+    times += r.summary.times;
+    UNSEEN_LOG_DEBUG("coasted pose: coarse conf {:.2f}, refined conf {:.2f} at {}",
+                     coasted_scored.confidence, r.confidence, r.world_from_obj.ToString());
+    if (r.world_from_obj.IsValid() && r.confidence >= options.failure.recover_confidence) {
+      r.summary.times = times;
+      r.summary.search_candidates = 1;
+      r.summary.search_choice = 0;
+      return r;
+    }
+  }
   Timer timer;
   std::vector<CorrelationSeed> seeds;
   if (o.use_correlation) {
@@ -513,9 +534,8 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
     candidates.insert(candidates.end(), around.begin(), around.end());
   }
 
-  // Score every candidate at the coarse levels (the full pyramid when it has no more).
-  const int levels = tracker_.NumLevelsFor(last_good);
-  const int finest = std::max(0, levels - o.score_levels);
+  // Score every candidate at the coarse levels (the full pyramid when it has no more); the
+  // coasted pose's score is the one above.
   struct Scored {
     double score;
     Rigid3d pose;
@@ -526,8 +546,9 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
   best.world_from_obj = coasted;
   int choice = -1;  // the candidate `best` came from
   for (int i = 0; i < static_cast<int>(candidates.size()); ++i) {
-    TrackResult c = AlignCoarse(images, finest, levels - finest, candidates[i]);
-    times += c.summary.times;
+    TrackResult c = i == 0 ? std::move(coasted_scored)
+                           : AlignCoarse(images, finest, levels - finest, candidates[i]);
+    if (i > 0) times += c.summary.times;
     if (!c.world_from_obj.IsValid()) continue;
     if (finest == 0) {  // already aligned at full resolution
       if (c.confidence > best.confidence) {

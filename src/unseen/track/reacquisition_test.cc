@@ -344,6 +344,33 @@ TEST_F(Reacquire, AnObjectThatLeftTheViewIsReacquiredWhenItComesBack) {
   EXPECT_LT(Difference(r.world_from_obj, back).translation, 0.003) << r.BriefReport();
 }
 
+TEST_F(Reacquire, AnObjectBackWhereItWasLostIsTakenAtTheCoastedPoseWithoutAFullSearch) {
+  // Hidden for a while, then back where it was: the coasted pose scores at the top at the
+  // coarse levels, its refinement re-acquires the object, and no other candidate is tried
+  // (ReacquisitionOptions::accept_coasted_score); without that, every candidate is scored.
+  auto back_after_hiding = [&](const TrackerOptions& options) {
+    Tracker tracker(rig_, cube_, options);
+    const Rigid3d start = CubePose();
+    tracker.Initialize(start);
+    TrackResult r;
+    for (int k = 0; k < 3; ++k) r = tracker.Track({Image(start)});
+    EXPECT_EQ(r.status, TrackStatus::kTracking);
+    for (int k = 0; k < 4; ++k) r = tracker.Track({background_});
+    EXPECT_EQ(r.status, TrackStatus::kLost);
+    r = tracker.Track({Image(start)});
+    EXPECT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
+    EXPECT_EQ(r.summary.search_choice, 0) << r.BriefReport();  // the coasted pose
+    EXPECT_LT(Difference(r.world_from_obj, start).translation, 0.003) << r.BriefReport();
+    return r.summary.search_candidates;
+  };
+  const TrackerOptions accept;
+  ASSERT_LE(accept.reacquisition.accept_coasted_score, 1.0);
+  EXPECT_EQ(back_after_hiding(accept), 1);
+  TrackerOptions never;
+  never.reacquisition.accept_coasted_score = 2.0;
+  EXPECT_GT(back_after_hiding(never), 1);
+}
+
 TEST_F(Reacquire, WhileNothingIsFoundTheSearchesAreQuietUntilTheObjectIsBack) {
   // Per lost frame, the candidates scored: complete searches, or quiet ones after a search
   // that found nothing (ReacquisitionOptions::quiet_candidates).

@@ -304,12 +304,12 @@ class HiddenTurningCube : public ::testing::Test {
 TEST_F(HiddenTurningCube, IsLookedForWhereItsMotionCarriedIt) {
   // The cube drifts while it turns. When it shows again it has turned 40 degrees from the
   // last pose seen: the search's first candidate, where the motion model carried it, finds
-  // it at once, a short way from there.
+  // it at once, a short way from there (and, scored at the top, ends the search).
   auto truth = [&](int k) { return Truth(k, Eigen::Vector3d(-0.02 + 0.002 * k, -0.01, 1.0)); };
   TrackerOptions options;
   const TrackResult coasted = FirstFrameBack(options, truth);
   EXPECT_EQ(coasted.status, TrackStatus::kTracking) << coasted.BriefReport();
-  EXPECT_GT(coasted.summary.search_candidates, 1) << coasted.BriefReport();
+  EXPECT_GE(coasted.summary.search_candidates, 1) << coasted.BriefReport();  // a search ran
   EXPECT_EQ(coasted.summary.search_choice, 0) << coasted.BriefReport();
   const PoseDifference e = Difference(coasted.world_from_obj, truth(14));
   EXPECT_LT(e.translation, 0.005) << coasted.BriefReport();

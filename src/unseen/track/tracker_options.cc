@@ -127,6 +127,9 @@ void ReacquisitionOptions::Check() const {
                "reacquisition.rotation_deg {} must be in [0, 90]", rotation_deg);
   UNSEEN_CHECK(max_candidates >= 0 && max_candidates <= 100,
                "reacquisition.max_candidates {} must be in [0, 100]", max_candidates);
+  UNSEEN_CHECK(accept_coasted_score >= 0.0 && std::isfinite(accept_coasted_score),
+               "reacquisition.accept_coasted_score {} must be >= 0 (above 1: never)",
+               accept_coasted_score);
   UNSEEN_CHECK(score_iterations >= 1 && score_iterations <= 100,
                "reacquisition.score_iterations {} must be in [1, 100]", score_iterations);
   UNSEEN_CHECK(score_levels >= 1 && score_levels <= 8,
@@ -308,6 +311,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"max_seeds", YamlField(&re.max_seeds)},
         {"rotation_deg", YamlField(&re.rotation_deg)},
         {"max_candidates", YamlField(&re.max_candidates)},
+        {"accept_coasted_score", YamlField(&re.accept_coasted_score)},
         {"turn_in_place", YamlField(&re.turn_in_place)},
         {"score_iterations", YamlField(&re.score_iterations)},
         {"score_levels", YamlField(&re.score_levels)},

@@ -237,6 +237,10 @@ struct ReacquisitionOptions {
   // each world axis through the object's centre, degrees; 0 = none.
   double rotation_deg = 25.0;
   int max_candidates = 12;         // start poses scored per lost frame, in priority order
+  // The coasted pose is scored first; at this coarse confidence or more it is refined at
+  // once, and a refinement that re-acquires the object ends the search (the correlation
+  // and the other candidates are skipped). > 1: never.
+  double accept_coasted_score = 0.99;
   // Besides the coasted pose, score its rotation with the object's centre held at the last
   // good pose (one more candidate). A textured box turning behind a crossing spider: the
   // motion model, corrected by the fading frames before the loss, carried the box 14 cm

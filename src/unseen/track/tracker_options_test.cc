@@ -65,6 +65,7 @@ TEST(TrackerOptions, ParsesTheReacquisitionSection) {
   const TrackerOptions o = ParseTrackerOptions(
       "reacquisition: {use_correlation: false, seed_object_px: 32, search_radii: 6,\n"
       "  min_correlation: 0.4, max_seeds: 3, rotation_deg: 20, max_candidates: 10,\n"
+      "  accept_coasted_score: 0.9,\n"
       "  score_levels: 2, score_iterations: 4, refine_candidates: 3, refine_levels: 3,\n"
       "  min_score: 0.1, quiet_candidates: -1, turn_in_place: false,\n"
       "  seed_when_doubtful: false, doubtful_confidence: 0.4, min_seed_shift_px: 2}\n");
@@ -76,6 +77,7 @@ TEST(TrackerOptions, ParsesTheReacquisitionSection) {
   EXPECT_EQ(r.max_seeds, 3);
   EXPECT_DOUBLE_EQ(r.rotation_deg, 20.0);
   EXPECT_EQ(r.max_candidates, 10);
+  EXPECT_DOUBLE_EQ(r.accept_coasted_score, 0.9);
   EXPECT_EQ(r.score_levels, 2);
   EXPECT_EQ(r.score_iterations, 4);
   EXPECT_EQ(r.refine_candidates, 3);
@@ -93,6 +95,7 @@ TEST(TrackerOptions, ParsesTheReacquisitionSection) {
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {score_iterations: 0}"), Error);
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {refine_levels: -1}"), Error);
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {quiet_candidates: -2}"), Error);
+  EXPECT_THROW(ParseTrackerOptions("reacquisition: {accept_coasted_score: -0.1}"), Error);
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {doubtful_confidence: 1.5}"), Error);
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {search_radius: 3}"), Error);  // unknown
 }
