@@ -73,6 +73,23 @@ class Reacquire : public ::testing::Test {
     }
     return held_since;
   }
+  // Tracks the cube standing at CubePose() for three frames, then shows the empty
+  // background for `hidden` frames; returns the last result. `searched` (if given)
+  // receives the candidates scored in each hidden frame that searched.
+  TrackResult TrackThenHide(Tracker* tracker, int hidden,
+                            std::vector<int>* searched = nullptr) const {
+    tracker->Initialize(CubePose());
+    TrackResult r;
+    for (int k = 0; k < 3; ++k) r = tracker->Track({Image(CubePose())});
+    EXPECT_EQ(r.status, TrackStatus::kTracking);
+    for (int k = 0; k < hidden; ++k) {
+      const bool was_lost = r.status == TrackStatus::kLost;  // this frame searches
+      r = tracker->Track({background_});
+      if (was_lost && searched) searched->push_back(r.summary.search_candidates);
+    }
+    EXPECT_EQ(r.status, TrackStatus::kLost);
+    return r;
+  }
   Rig rig_;
   Mesh cube_;
   cv::Mat background_;
@@ -323,15 +340,8 @@ TEST_F(Reacquire, AnUntexturedObjectThatLeftTheViewIsReacquired) {
 TEST_F(Reacquire, AnObjectThatLeftTheViewIsReacquiredWhenItComesBack) {
   Tracker tracker(rig_, cube_);
   const Rigid3d start = CubePose();
-  tracker.Initialize(start);
-  TrackResult r;
-  for (int k = 0; k < 3; ++k) {
-    r = tracker.Track({Image(start)});
-    EXPECT_EQ(r.status, TrackStatus::kTracking);
-  }
   // Gone: an empty background for a while.
-  for (int k = 0; k < 6; ++k) r = tracker.Track({background_});
-  EXPECT_EQ(r.status, TrackStatus::kLost);
+  TrackResult r = TrackThenHide(&tracker, 6);
   EXPECT_LT(r.confidence, 0.3);
   // Back 140 mm left and 30 mm lower, and turned by 10 degrees.
   Rigid3d back(start.rotation(), start.translation() + Eigen::Vector3d(0.14, 0.03, 0.0));
@@ -351,13 +361,8 @@ TEST_F(Reacquire, AnObjectBackWhereItWasLostIsTakenAtTheCoastedPoseWithoutAFullS
   auto back_after_hiding = [&](const TrackerOptions& options) {
     Tracker tracker(rig_, cube_, options);
     const Rigid3d start = CubePose();
-    tracker.Initialize(start);
-    TrackResult r;
-    for (int k = 0; k < 3; ++k) r = tracker.Track({Image(start)});
-    EXPECT_EQ(r.status, TrackStatus::kTracking);
-    for (int k = 0; k < 4; ++k) r = tracker.Track({background_});
-    EXPECT_EQ(r.status, TrackStatus::kLost);
-    r = tracker.Track({Image(start)});
+    TrackThenHide(&tracker, 4);
+    const TrackResult r = tracker.Track({Image(start)});
     EXPECT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
     EXPECT_EQ(r.summary.search_choice, 0) << r.BriefReport();  // the coasted pose
     EXPECT_LT(Difference(r.world_from_obj, start).translation, 0.003) << r.BriefReport();
@@ -377,16 +382,7 @@ TEST_F(Reacquire, WhileNothingIsFoundTheSearchesAreQuietUntilTheObjectIsBack) {
   auto searched = [&](const TrackerOptions& options, std::vector<int>* candidates) {
     Tracker tracker(rig_, cube_, options);
     const Rigid3d start = CubePose();
-    tracker.Initialize(start);
-    TrackResult r;
-    for (int k = 0; k < 3; ++k) r = tracker.Track({Image(start)});
-    EXPECT_EQ(r.status, TrackStatus::kTracking);
-    for (int k = 0; k < 8; ++k) {
-      const bool was_lost = r.status == TrackStatus::kLost;  // this frame searches
-      r = tracker.Track({background_});
-      if (was_lost) candidates->push_back(r.summary.search_candidates);
-    }
-    EXPECT_EQ(r.status, TrackStatus::kLost);
+    TrackResult r = TrackThenHide(&tracker, 8, candidates);
     const Rigid3d back(start.rotation(), start.translation() + Eigen::Vector3d(0.12, 0.03, 0.0));
     int frames = 0;
     for (; frames < 4 && r.status == TrackStatus::kLost; ++frames) r = tracker.Track({Image(back)});
