@@ -1,14 +1,9 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/mesh/mesh_io.h"
 
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
 #include <fmt/ranges.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <assimp/Exporter.hpp>
-#include <assimp/Importer.hpp>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -21,6 +16,7 @@
 
 #include "unseen/image/image_io.h"
 #include "unseen/mesh/primitives.h"
+#include "unseen/mesh/test_mesh_files.h"
 #include "unseen/util/error.h"
 
 namespace unseen {
@@ -30,144 +26,17 @@ namespace fs = std::filesystem;
 
 const std::string kSequences = std::string(UNSEEN_SOURCE_DIR) + "/../shared/data/sequences";
 
-// A fresh folder per test, removed afterwards.
-class MeshIoTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("unseen_mesh_io_" + std::string(info->name()) + "_" + std::to_string(getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
-  std::string ReadFile(const std::string& path) const {
-    std::ifstream in(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), {});
-  }
-  std::string Write(const std::string& name, const std::string& text) const {
-    std::ofstream(Path(name), std::ios::binary) << text;
-    return Path(name);
-  }
-
-  fs::path dir_;
-};
-
-// An 8x8 texture whose top half (image rows 0-3) is red and bottom half blue.
-cv::Mat TopRedBottomBlue() {
-  cv::Mat image(8, 8, CV_8UC3, cv::Scalar(255, 0, 0));  // BGR blue
-  image.rowRange(0, 4).setTo(cv::Scalar(0, 0, 255));    // red
-  return image;
-}
-
-bool IsRed(const cv::Vec3f& c) { return c[2] > 0.9f && c[0] < 0.1f && c[1] < 0.1f; }
-bool IsBlue(const cv::Vec3f& c) { return c[0] > 0.9f && c[2] < 0.1f && c[1] < 0.1f; }
-
-// Bilinear texture lookup with the OBJ convention: column u * cols, row (1 - v) * rows.
-cv::Vec3f SampleUv(const cv::Mat& texture, const Eigen::Vector2f& uv) {
-  const float x = uv.x() * texture.cols - 0.5f;
-  const float y = (1.0f - uv.y()) * texture.rows - 0.5f;
-  const int x0 = std::clamp(static_cast<int>(std::floor(x)), 0, texture.cols - 1);
-  const int y0 = std::clamp(static_cast<int>(std::floor(y)), 0, texture.rows - 1);
-  const int x1 = std::min(x0 + 1, texture.cols - 1);
-  const int y1 = std::min(y0 + 1, texture.rows - 1);
-  const float fx = std::clamp(x - x0, 0.0f, 1.0f);
-  const float fy = std::clamp(y - y0, 0.0f, 1.0f);
-  return (1 - fy) *
-             ((1 - fx) * texture.at<cv::Vec3f>(y0, x0) + fx * texture.at<cv::Vec3f>(y0, x1)) +
-         fy * ((1 - fx) * texture.at<cv::Vec3f>(y1, x0) + fx * texture.at<cv::Vec3f>(y1, x1));
-}
-
-// The colour the renderer would show at barycentric point `bary` of triangle t (texture,
-// else vertex colour, else material colour).
-cv::Vec3f SurfaceColour(const Mesh& mesh, int t, const Eigen::Vector3f& bary) {
-  const Eigen::Vector3i& tri = mesh.triangles[t];
-  const int m = mesh.triangle_materials.empty() ? 0 : mesh.triangle_materials[t];
-  if (!mesh.uvs.empty() && !mesh.materials[m].texture.empty()) {
-    const Eigen::Vector2f uv =
-        bary[0] * mesh.uvs[tri[0]] + bary[1] * mesh.uvs[tri[1]] + bary[2] * mesh.uvs[tri[2]];
-    return SampleUv(mesh.materials[m].texture, uv);
-  }
-  if (!mesh.colors_bgr.empty()) {
-    const Eigen::Vector3f c = bary[0] * mesh.colors_bgr[tri[0]] +
-                              bary[1] * mesh.colors_bgr[tri[1]] + bary[2] * mesh.colors_bgr[tri[2]];
-    return {c[0], c[1], c[2]};
-  }
-  const Eigen::Vector3f& d = mesh.materials[m].diffuse_bgr;
-  return {d[0], d[1], d[2]};
-}
-
-// Triangle whose three vertices match `other`'s triangle t in position (same order).
-int FindTriangle(const Mesh& mesh, const Mesh& other, int t, float tolerance) {
-  for (int s = 0; s < mesh.num_triangles(); ++s) {
-    bool same = true;
-    for (int k = 0; k < 3 && same; ++k) {
-      same = (mesh.vertices[mesh.triangles[s][k]] - other.vertices[other.triangles[t][k]]).norm() <
-             tolerance;
-    }
-    if (same) return s;
-  }
-  return -1;
-}
-
-// Same triangles (same winding) and the same surface colour at several points of each.
-void ExpectSameAppearance(const Mesh& expected, const Mesh& actual, float colour_tolerance) {
-  ASSERT_EQ(expected.num_triangles(), actual.num_triangles());
-  const Eigen::Vector3f points[] = {
-      {1 / 3.f, 1 / 3.f, 1 / 3.f}, {0.7f, 0.2f, 0.1f}, {0.1f, 0.7f, 0.2f}, {0.2f, 0.1f, 0.7f}};
-  for (int t = 0; t < expected.num_triangles(); ++t) {
-    const int s = FindTriangle(actual, expected, t, 1e-5f);
-    ASSERT_GE(s, 0) << "triangle " << t << " not found";
-    for (const Eigen::Vector3f& bary : points) {
-      const cv::Vec3f a = SurfaceColour(expected, t, bary);
-      const cv::Vec3f b = SurfaceColour(actual, s, bary);
-      EXPECT_LT(cv::norm(a - b), colour_tolerance)
-          << "triangle " << t << " at " << bary.transpose();
-    }
-  }
-}
-
-// Every triangle faces away from the origin (convex objects centred on it).
-void ExpectOutward(const Mesh& mesh) {
-  for (int t = 0; t < mesh.num_triangles(); ++t) {
-    const Eigen::Vector3i& tri = mesh.triangles[t];
-    const Eigen::Vector3f& a = mesh.vertices[tri[0]];
-    const Eigen::Vector3f n = (mesh.vertices[tri[1]] - a).cross(mesh.vertices[tri[2]] - a);
-    EXPECT_GT(n.dot(a + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]), 0.0f) << "triangle " << t;
-  }
-}
-
-// Textures are not mirrored seen from outside: on every triangle the uv frame (u right,
-// v up) has the same handedness as the surface seen from outside, i.e.
-// (dP/du x dP/dv) . n > 0 with n the triangle's outward (right-hand-rule) normal.
-void ExpectTexturesNotMirrored(const Mesh& mesh) {
-  for (int t = 0; t < mesh.num_triangles(); ++t) {
-    const Eigen::Vector3i& tri = mesh.triangles[t];
-    const Eigen::Vector3f e1 = mesh.vertices[tri[1]] - mesh.vertices[tri[0]];
-    const Eigen::Vector3f e2 = mesh.vertices[tri[2]] - mesh.vertices[tri[0]];
-    const Eigen::Vector2f d1 = mesh.uvs[tri[1]] - mesh.uvs[tri[0]];
-    const Eigen::Vector2f d2 = mesh.uvs[tri[2]] - mesh.uvs[tri[0]];
-    // [e1 e2] = [dP/du dP/dv] [d1 d2]; the sign of det[d1 d2] says whether the uv
-    // triangle is counter-clockwise like the 3-D one seen from outside.
-    const float uv_area = d1.x() * d2.y() - d1.y() * d2.x();
-    ASSERT_GT(e1.cross(e2).norm(), 0.0f);
-    EXPECT_GT(uv_area, 0.0f) << "triangle " << t << " maps its texture mirrored";
-  }
-}
-
-void ExpectThrowsMentioning(const std::function<void()>& f, const std::vector<std::string>& words) {
-  try {
-    f();
-    ADD_FAILURE() << "no unseen::Error thrown";
-  } catch (const Error& e) {
-    for (const std::string& w : words) {
-      EXPECT_NE(std::string(e.what()).find(w), std::string::npos)
-          << "message '" << e.what() << "' does not mention '" << w << "'";
-    }
-  }
-}
+using testing::ExpectOutward;
+using testing::ExpectSameAppearance;
+using testing::ExpectTexturesNotMirrored;
+using testing::ExpectThrowsMentioning;
+using testing::IsBlue;
+using testing::IsRed;
+using testing::kQuadObj;
+using testing::MeshIoTest;
+using testing::SampleUv;
+using testing::SurfaceColour;
+using testing::TopRedBottomBlue;
 
 // ---------------------------------------------------------------------------------------
 // Development sequence models (Blender OBJ exports, millimetres).
@@ -244,21 +113,6 @@ TEST(DevModels, SphereAndBox) {
 
 // ---------------------------------------------------------------------------------------
 // OBJ
-
-// A unit quad in the z = 0 plane facing +z; vt (0, 0) at the bottom-left corner.
-const char* kQuadObj = R"(mtllib quad.mtl
-v 0 0 0
-v 1 0 0
-v 1 1 0
-v 0 1 0
-vt 0 0
-vt 1 0
-vt 1 1
-vt 0 1
-usemtl tex
-f 1/1 2/2 3/3
-f 1/1 3/3 4/4
-)";
 
 TEST_F(MeshIoTest, ObjTextureIsRightWayUp) {
   cv::imwrite(Path("quad.png"), TopRedBottomBlue());
@@ -577,212 +431,6 @@ TEST_F(MeshIoTest, AsciiPlyValuesAreReadLineByLine) {
 TEST_F(MeshIoTest, NanVertexInObj) {
   const std::string path = Write("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
   ExpectThrowsMentioning([&] { LoadMesh(path); }, {path});
-}
-
-// ---------------------------------------------------------------------------------------
-// glTF 2 and Collada
-
-std::string Base64(const std::vector<unsigned char>& bytes) {
-  static const char* kTable = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  size_t i = 0;
-  for (; i + 2 < bytes.size(); i += 3) {
-    const unsigned n = (bytes[i] << 16) | (bytes[i + 1] << 8) | bytes[i + 2];
-    for (int k = 3; k >= 0; --k) out.push_back(kTable[(n >> (6 * k)) & 63]);
-  }
-  if (i + 1 == bytes.size()) {
-    const unsigned n = bytes[i] << 16;
-    out += {kTable[(n >> 18) & 63], kTable[(n >> 12) & 63], '=', '='};
-  } else if (i + 2 == bytes.size()) {
-    const unsigned n = (bytes[i] << 16) | (bytes[i + 1] << 8);
-    out += {kTable[(n >> 18) & 63], kTable[(n >> 12) & 63], kTable[(n >> 6) & 63], '='};
-  }
-  return out;
-}
-
-template <typename T>
-void Append(std::vector<unsigned char>* bytes, const std::vector<T>& values) {
-  const auto* p = reinterpret_cast<const unsigned char*>(values.data());
-  bytes->insert(bytes->end(), p, p + values.size() * sizeof(T));
-}
-
-// A textured unit quad (z = 0, facing +z) in glTF 2 with every buffer and the PNG
-// embedded as data URIs, under a node translated by (5, 0, 0). glTF texture coordinates
-// have (0, 0) at the top-left of the image: the top of the quad gets v = 0.
-std::string QuadGltf(const std::string& image_uri) {
-  const std::vector<float> positions = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
-  const std::vector<float> uvs = {0, 1, 1, 1, 1, 0, 0, 0};
-  const std::vector<uint16_t> indices = {0, 1, 2, 0, 2, 3};
-  std::vector<unsigned char> buffer;
-  Append(&buffer, positions);  // 48 bytes
-  Append(&buffer, uvs);        // 32 bytes
-  Append(&buffer, indices);    // 12 bytes
-  return R"({"asset": {"version": "2.0"},
-  "scene": 0, "scenes": [{"nodes": [0]}],
-  "nodes": [{"mesh": 0, "translation": [5, 0, 0]}],
-  "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2,
-                              "material": 0}]}],
-  "materials": [{"name": "painted", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
-  "textures": [{"source": 0}],
-  "images": [{"uri": ")" +
-         image_uri + R"("}],
-  "buffers": [{"byteLength": 92, "uri": "data:application/octet-stream;base64,)" +
-         Base64(buffer) + R"("}],
-  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
-                  {"buffer": 0, "byteOffset": 48, "byteLength": 32},
-                  {"buffer": 0, "byteOffset": 80, "byteLength": 12}],
-  "accessors": [
-    {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
-     "min": [0, 0, 0], "max": [1, 1, 0]},
-    {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
-    {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}]
-})";
-}
-
-void ExpectQuadTopRed(const Mesh& mesh, float x_offset) {
-  ASSERT_EQ(mesh.num_triangles(), 2);
-  ASSERT_TRUE(mesh.HasUvTexture());
-  Eigen::Vector3f lo, hi;
-  mesh.BoundingBox(&lo, &hi);
-  EXPECT_TRUE(lo.isApprox(Eigen::Vector3f(x_offset, 0, 0))) << lo.transpose();
-  for (int t = 0; t < mesh.num_triangles(); ++t) {
-    for (int k = 0; k < 3; ++k) {
-      const int v = mesh.triangles[t][k];
-      const cv::Vec3f c = SampleUv(mesh.materials[mesh.triangle_materials[t]].texture, mesh.uvs[v]);
-      EXPECT_TRUE(mesh.vertices[v].y() > 0.5f ? IsRed(c) : IsBlue(c)) << mesh.vertices[v] << c;
-    }
-  }
-}
-
-TEST_F(MeshIoTest, GltfEmbeddedTextureAndNodeTransform) {
-  std::vector<unsigned char> png;
-  cv::imencode(".png", TopRedBottomBlue(), png);
-  const Mesh mesh = LoadMesh(Write("quad.gltf", QuadGltf("data:image/png;base64," + Base64(png))));
-  ExpectQuadTopRed(mesh, 5.0f);
-  EXPECT_EQ(mesh.materials[0].name, "painted");
-  EXPECT_EQ(mesh.materials[0].texture_path, "");  // embedded: no file of its own
-}
-
-TEST_F(MeshIoTest, GltfImageMediaTypeWithoutSubtypeIsAnError) {
-  std::vector<unsigned char> png;
-  cv::imencode(".png", TopRedBottomBlue(), png);
-  const std::string path = Write("quad.gltf", QuadGltf("data:imagepng;base64," + Base64(png)));
-  ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "imagepng"});
-}
-
-TEST_F(MeshIoTest, GltfExternalTexture) {
-  cv::imwrite(Path("quad texture.png"), TopRedBottomBlue());
-  const Mesh mesh = LoadMesh(Write("quad.gltf", QuadGltf("quad%20texture.png")));
-  ExpectQuadTopRed(mesh, 5.0f);
-  fs::remove(Path("quad texture.png"));
-  ExpectThrowsMentioning([&] { LoadMesh(Path("quad.gltf")); }, {"quad.gltf", "quad%20texture.png"});
-}
-
-// A triangle with per-vertex colours (COLOR_0) and a material with a base colour factor.
-std::string ColouredTriangleGltf(
-    const std::vector<float>& colours = {1, 0, 0, 0, 1, 0, 0, 0, 1}) {  // RGB per vertex
-  const std::vector<float> positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
-  std::vector<unsigned char> buffer;
-  Append(&buffer, positions);
-  Append(&buffer, colours);
-  return R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
-  "nodes": [{"mesh": 0}],
-  "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "COLOR_0": 1}, "material": 0}]}],
-  "materials": [{"name": "tinted", "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 1]}}],
-  "buffers": [{"byteLength": 72, "uri": "data:application/octet-stream;base64,)" +
-         Base64(buffer) + R"("}],
-  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
-                  {"buffer": 0, "byteOffset": 36, "byteLength": 36}],
-  "accessors": [
-    {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
-     "min": [0, 0, 0], "max": [1, 1, 0]},
-    {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3"}]
-})";
-}
-
-TEST_F(MeshIoTest, GltfVertexColoursAndBaseColour) {
-  const Mesh mesh = LoadMesh(Write("tri.gltf", ColouredTriangleGltf()));
-  ASSERT_EQ(mesh.num_triangles(), 1);
-  ASSERT_EQ(mesh.materials.size(), 1u);
-  EXPECT_TRUE(mesh.materials[0].diffuse_bgr.isApprox(Eigen::Vector3f(0.6f, 0.4f, 0.2f), 1e-5f))
-      << mesh.materials[0].diffuse_bgr.transpose();
-  ASSERT_EQ(mesh.colors_bgr.size(), 3u);
-  for (int v = 0; v < 3; ++v) {
-    const Eigen::Vector3f& p = mesh.vertices[v];
-    const Eigen::Vector3f expected = p.x() > 0.5f   ? Eigen::Vector3f(0, 1, 0)
-                                     : p.y() > 0.5f ? Eigen::Vector3f(1, 0, 0)
-                                                    : Eigen::Vector3f(0, 0, 1);
-    EXPECT_TRUE(mesh.colors_bgr[v].isApprox(expected, 1e-5f)) << mesh.colors_bgr[v].transpose();
-  }
-}
-
-TEST_F(MeshIoTest, AVertexColourThatIsNotANumberIsAnError) {
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  const std::string path = Write("nan.gltf", ColouredTriangleGltf({1, 0, 0, 0, nan, nan, 0, 0, 1}));
-  ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "vertex 1", "colour"});
-}
-
-// Loads `source` with assimp and writes it with assimp's exporter `format_id`.
-void AssimpConvert(const std::string& source, const std::string& format_id,
-                   const std::string& target) {
-  Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(source, aiProcess_Triangulate);
-  ASSERT_NE(scene, nullptr) << importer.GetErrorString();
-  Assimp::Exporter exporter;
-  ASSERT_EQ(exporter.Export(scene, format_id, target), AI_SUCCESS) << exporter.GetErrorString();
-}
-
-TEST_F(MeshIoTest, ColladaAndGlbFromAssimpExporter) {
-  cv::imwrite(Path("quad.png"), TopRedBottomBlue());
-  Write("quad.mtl", "newmtl tex\nKd 1 1 1\nmap_Kd quad.png\n");
-  const std::string obj = Write("quad.obj", kQuadObj);
-  const Mesh reference = LoadMesh(obj);
-  AssimpConvert(obj, "collada", Path("quad.dae"));
-  ExpectSameAppearance(reference, LoadMesh(Path("quad.dae")), 1e-3f);
-  AssimpConvert(obj, "glb2", Path("quad.glb"));
-  ExpectSameAppearance(reference, LoadMesh(Path("quad.glb")), 1e-3f);
-  AssimpConvert(obj, "gltf2", Path("quad2.gltf"));
-  ExpectSameAppearance(reference, LoadMesh(Path("quad2.gltf")), 1e-3f);
-}
-
-TEST_F(MeshIoTest, ColladaKeepsFileAxesAndAppliesUnit) {
-  const std::string obj = Write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 2 0\nv 0 0 3\nf 1 2 3\nf 1 4 2\n");
-  AssimpConvert(obj, "collada", Path("t.dae"));
-  std::ifstream in(Path("t.dae"));
-  std::string text((std::istreambuf_iterator<char>(in)), {});
-  for (const auto& [from, to] :
-       {std::pair<std::string, std::string>{"Y_UP", "Z_UP"},
-        std::pair<std::string, std::string>{"meter=\"1\"", "meter=\"0.01\""}}) {
-    const size_t at = text.find(from);
-    ASSERT_NE(at, std::string::npos) << from;
-    text.replace(at, from.size(), to);
-  }
-  const Mesh mesh = LoadMesh(Write("z_up_cm.dae", text));
-  Eigen::Vector3f lo, hi;
-  mesh.BoundingBox(&lo, &hi);
-  EXPECT_TRUE(lo.isApprox(Eigen::Vector3f::Zero()) || lo.norm() < 1e-7f) << lo.transpose();
-  EXPECT_TRUE(hi.isApprox(Eigen::Vector3f(0.01f, 0.02f, 0.03f), 1e-5f)) << hi.transpose();
-}
-
-TEST_F(MeshIoTest, ColladaDataArrayWithoutValuesIsAnError) {
-  const std::string obj = Write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 2 0\nf 1 2 3\n");
-  AssimpConvert(obj, "collada", Path("t.dae"));
-  std::string text = ReadFile(Path("t.dae"));
-  const size_t array = text.find("<float_array");
-  ASSERT_NE(array, std::string::npos);
-  const size_t count = text.find("count=\"", array);
-  ASSERT_NE(count, std::string::npos);
-  text.replace(count, text.find('"', count + 7) + 1 - count, "count=\"0\"");
-  const std::string path = Write("empty_array.dae", text);
-  ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "count=\"0\""});
-
-  // A stride whose index arithmetic wraps around.
-  text = ReadFile(Path("t.dae"));
-  const size_t stride = text.find("stride=\"");
-  ASSERT_NE(stride, std::string::npos);
-  text.replace(stride, text.find('"', stride + 8) + 1 - stride, "stride=\"4294967296\"");
-  const std::string huge_stride = Write("huge_stride.dae", text);
-  ExpectThrowsMentioning([&] { LoadMesh(huge_stride); }, {huge_stride, "stride"});
 }
 
 // ---------------------------------------------------------------------------------------
