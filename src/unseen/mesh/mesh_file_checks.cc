@@ -1,8 +1,11 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/mesh/mesh_file_checks.h"
 
+#include <assimp/BaseImporter.h>
 #include <assimp/mesh.h>
 #include <assimp/scene.h>
+
+#include <assimp/Importer.hpp>
 
 #include <algorithm>
 #include <cctype>
@@ -389,6 +392,37 @@ void CheckGltfText(const std::string& path, bool binary) {
     while (i < json.size() && (IsBlank(json[i]) || json[i] == ':')) ++i;
     if (i < json.size() && json[i] == '"') check_media_type(string_at(i + 1), "a mimeType");
   }
+}
+
+void CheckImporterForExtension(const Assimp::Importer& importer, const std::string& path) {
+  std::string lower = path;
+  std::transform(lower.begin(), lower.end(), lower.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::vector<Assimp::BaseImporter*> claiming;
+  for (size_t i = 0; i < importer.GetImporterCount(); ++i) {
+    Assimp::BaseImporter* candidate = importer.GetImporter(i);
+    if (candidate == nullptr) continue;
+    std::set<std::string> extensions;
+    candidate->GetExtensionList(extensions);
+    for (const std::string& extension : extensions) {  // the whole ending: "mesh.xml"
+      const std::string ending = "." + extension;
+      if (lower.size() >= ending.size() &&
+          lower.compare(lower.size() - ending.size(), ending.size(), ending) == 0) {
+        claiming.push_back(candidate);
+        break;
+      }
+    }
+  }
+  UNSEEN_CHECK(!claiming.empty(), "{}: no mesh format has this file's extension", path);
+  if (claiming.size() == 1) return;  // assimp takes it without guessing
+  for (const Assimp::BaseImporter* candidate : claiming) {
+    try {
+      if (candidate->CanRead(path, importer.GetIOHandler(), true)) return;
+    } catch (...) {  // a malformed file some importers' checks throw on: not theirs
+    }
+  }
+  ThrowError("{}: not a file of the format its extension names (no reader for it recognises it)",
+             path);
 }
 
 // Throws naming the file for faces without indices, indices out of range and non-finite

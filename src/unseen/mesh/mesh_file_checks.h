@@ -12,6 +12,9 @@
 #include <vector>
 
 struct aiScene;
+namespace Assimp {
+class Importer;
+}  // namespace Assimp
 
 namespace unseen::mesh_checks {
 
@@ -34,6 +37,13 @@ void CheckColladaText(const std::string& path);
 
 // glTF JSON nesting and .glb header lengths.
 void CheckGltfText(const std::string& path, bool binary);
+
+// assimp picks the importer by the file's extension; when several claim it (.gltf: glTF 1
+// and 2) and every one of them turns the file down, it guesses the format from the content
+// among all its importers, whose bugs a malformed .gltf was found to reach (read as
+// OpenGEX: a heap overflow). Throws naming the file unless one importer claims the
+// extension, or one of those that claim it recognises the file.
+void CheckImporterForExtension(const Assimp::Importer& importer, const std::string& path);
 
 // Faces without indices, indices out of range and non-finite positions in assimp's raw scene.
 void CheckRawScene(const aiScene& scene, const std::string& path);

@@ -121,6 +121,13 @@ TEST_F(MeshIoTest, GltfImageMediaTypeWithoutSubtypeIsAnError) {
   ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "imagepng"});
 }
 
+TEST_F(MeshIoTest, AGltfFileNeitherGltfReaderRecognisesIsAnError) {
+  // Not JSON: without the check assimp guessed the format from the content and read it
+  // with another importer (here OpenGEX, for the keyword IndexArray).
+  const std::string path = Write("guess.gltf", "g IndexArray {float {1, 2}} Metric {}\n");
+  ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "format"});
+}
+
 TEST_F(MeshIoTest, GltfExternalTexture) {
   cv::imwrite(Path("quad texture.png"), TopRedBottomBlue());
   const Mesh mesh = LoadMesh(Write("quad.gltf", QuadGltf("quad%20texture.png")));

@@ -574,6 +574,7 @@ Mesh LoadMesh(const std::string& path, double scale_to_metres) {
   // Drop points and lines; keep triangles (polygons are triangulated).
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
                               aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  CheckImporterForExtension(importer, path);
   const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
   UNSEEN_CHECK(scene != nullptr, "{}: cannot read mesh: {}", path, importer.GetErrorString());
   // assimp's post-processing asserts (aborts) on some malformed data that its validation
