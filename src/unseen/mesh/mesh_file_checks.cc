@@ -164,7 +164,7 @@ void CheckObjIndices(const std::string& path, const std::string& text) {
         char* end = nullptr;
         const long long i = std::strtoll(index.c_str(), &end, 10);
         const bool valid =
-            !index.empty() && *end == '\0' && i != 0 && (i > 0 ? i <= total[k] : -i <= so_far[k]);
+            !index.empty() && *end == '\0' && i != 0 && (i > 0 ? i <= total[k] : i >= -so_far[k]);
         UNSEEN_CHECK(valid, "{}: line {}: '{}' refers to {} {}, but the file has {}", path, n,
                      line.substr(0, 80), kNames[k], index, total[k]);
       }

@@ -428,6 +428,13 @@ TEST_F(MeshIoTest, AsciiPlyValuesAreReadLineByLine) {
   EXPECT_EQ(LoadMesh(crlf).num_triangles(), 1);
 }
 
+TEST_F(MeshIoTest, ObjRelativeIndexBeyondEveryIntegerIsAnError) {
+  // strtoll clamps it to the most negative integer, whose negation overflows.
+  const std::string path =
+      Write("far.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -99999999999999999999999\n");
+  ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "-99999999999999999999999"});
+}
+
 TEST_F(MeshIoTest, NanVertexInObj) {
   const std::string path = Write("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
   ExpectThrowsMentioning([&] { LoadMesh(path); }, {path});
