@@ -81,8 +81,15 @@ void CheckPlyHeader(const std::string& path) {
     const std::vector<std::string> words{std::istream_iterator<std::string>(stream),
                                          std::istream_iterator<std::string>()};
     const std::string keyword = words.empty() ? "" : words[0];
+    // assimp separates words by spaces and tabs only: another control character (a
+    // vertical tab) would join what the split above separates ("vertex_indices\v").
+    const bool plain = std::none_of(line.begin(), line.end(), [](unsigned char c) {
+      return (c < 0x20 && c != '\t') || c == 0x7f;
+    });
     bool valid = false;
-    if (n == 1) {
+    if (!plain && keyword != "comment" && keyword != "obj_info") {
+      valid = false;
+    } else if (n == 1) {
       valid = words.size() == 1 && keyword == "ply";
     } else if (keyword == "comment" || keyword == "obj_info") {
       valid = true;

@@ -428,6 +428,16 @@ TEST_F(MeshIoTest, AsciiPlyValuesAreReadLineByLine) {
   EXPECT_EQ(LoadMesh(crlf).num_triangles(), 1);
 }
 
+TEST_F(MeshIoTest, PlyHeaderLineWithAVerticalTabIsAnError) {
+  // assimp splits words at spaces and tabs only: "vertex_indices\v" was another name to it,
+  // a face element without indices, and a null dereference.
+  const std::string path =
+      Write("vt.ply", std::string(kPlyHeader3) +
+                          "element face 1\nproperty list uchar int vertex_indices\v\nend_header\n"
+                          "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "header line"});
+}
+
 TEST_F(MeshIoTest, ObjRelativeIndexBeyondEveryIntegerIsAnError) {
   // strtoll clamps it to the most negative integer, whose negation overflows.
   const std::string path =
