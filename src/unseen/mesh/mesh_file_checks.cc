@@ -263,6 +263,20 @@ bool IsNumberUpTo(const std::string& value, size_t limit) {
   return plain && std::stoull(digits, nullptr, hex ? 16 : 10) <= limit;
 }
 
+// Whether the integer part of the decimal number that starts `token` (after a sign) is at
+// most 2^64 - 1. assimp reads a number's integer part as a 64-bit integer and, when it
+// overflows, returns 0 without moving on: the next value is read from the same digits
+// (in a PLY file, a list count taken from a coordinate: a 13 GB allocation).
+bool IntegerPartFitsUint64(const std::string& token) {
+  size_t i = token.empty() || (token[0] != '-' && token[0] != '+') ? 0 : 1;
+  while (i < token.size() && token[i] == '0') ++i;
+  const size_t first = i;
+  while (i < token.size() && std::isdigit(static_cast<unsigned char>(token[i]))) ++i;
+  const std::string digits = token.substr(first, i - first);
+  static const std::string kMax = "18446744073709551615";
+  return digits.size() < kMax.size() || (digits.size() == kMax.size() && digits <= kMax);
+}
+
 // The range of a PLY integer type; +-infinity for the floating-point types.
 std::pair<double, double> IntegerRange(const std::string& type) {
   if (type == "char" || type == "int8") return {-128.0, 127.0};
@@ -551,6 +565,14 @@ std::optional<PlyFaceTexcoords> ReadPlyBody(const std::string& path) {
   };
   auto read_value = [&](const std::string& type) -> double {
     if (format == Format::kAscii) {
+      const std::streampos at = instance.tellg();
+      std::string token;
+      if (instance >> token) {
+        UNSEEN_CHECK(IntegerPartFitsUint64(token),
+                     "{}: PLY value '{}' has an integer part beyond 64 bits", path,
+                     token.substr(0, 40));
+        instance.seekg(at);
+      }
       double value;
       instance >> value;
       UNSEEN_CHECK(!instance.fail(),

@@ -428,6 +428,26 @@ TEST_F(MeshIoTest, AsciiPlyValuesAreReadLineByLine) {
   EXPECT_EQ(LoadMesh(crlf).num_triangles(), 1);
 }
 
+// assimp reads a number's integer part as a 64-bit integer and, when that overflows,
+// returns 0 without moving on, so the next property (here a list count) is read from the
+// same digits. Such a coordinate is an error naming it; one in exponent form is read.
+TEST_F(MeshIoTest, AsciiPlyCoordinateBeyond64BitsIsAnError) {
+  const std::string header = std::string(kPlyHeader3) +
+                             "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string beyond =
+      Write("beyond.ply", header + "0 0 0\n1 0 118446744073709551616\n0 1 0\n3 0 1 2\n");
+  ExpectThrowsMentioning([&] { LoadMesh(beyond); }, {beyond, "118446744073709551616"});
+  const std::string signed_beyond =
+      Write("signed.ply", header + "0 0 0\n1 0 -18446744073709551616.5\n0 1 0\n3 0 1 2\n");
+  ExpectThrowsMentioning([&] { LoadMesh(signed_beyond); }, {signed_beyond, "integer part"});
+  const std::string largest =
+      Write("largest.ply", header + "0 0 0\n1 0 0018446744073709551615\n0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(LoadMesh(largest).num_triangles(), 1);
+  const std::string exponent =
+      Write("exponent.ply", header + "0 0 0\n1 0 1.2e20\n0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(LoadMesh(exponent).num_triangles(), 1);
+}
+
 TEST_F(MeshIoTest, PlyHeaderLineWithAVerticalTabIsAnError) {
   // assimp splits words at spaces and tabs only: "vertex_indices\v" was another name to it,
   // a face element without indices, and a null dereference.
