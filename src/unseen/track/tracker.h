@@ -166,6 +166,9 @@ class Tracker {
   const MotionPredictor& predictor() const { return *predictor_; }
   bool initialized() const { return initialized_; }
   TrackStatus status() const { return status_; }
+  // The photometric residual of the confident frames that the confidence judges a frame's
+  // against (FailureOptions::residual_reference_rate), px; 0 before the first.
+  double residual_reference_px() const { return residual_reference_px_; }
   // Whether the photometric modality runs for the current model (PhotometricOptions:
   // enabled, require_appearance, and the first frame's min_start_fit check).
   bool photometric_in_use() const { return use_photometric_; }

@@ -9,6 +9,7 @@
 #include <map>
 
 #include "unseen/mesh/primitives.h"
+#include "unseen/render/rasterizer.h"
 #include "unseen/track/test_scene.h"
 #include "unseen/track/tracker.h"
 #include "unseen/util/error.h"
@@ -343,6 +344,54 @@ TEST_F(HiddenTurningCube, ThatStoppedBehindAnOccluderIsLookedForTurnedInPlace) {
   const TrackResult without = FirstFrameBack(options, truth);
   EXPECT_EQ(without.summary.search_candidates + 1, found.summary.search_candidates);
   EXPECT_EQ(without.status, TrackStatus::kLost) << without.BriefReport();
+}
+
+// The cube's texture fits a little worse every frame while the pose stays right: from frame
+// 6 on, noise growing by 0.006 a frame (intensity in [0, 1]) is added to the cube's pixels
+// only, so that its silhouette stays as it was. Returns the photometric reference residual
+// after `frames` frames, each of which must be tracked within 2 mm.
+double ReferenceWhileTheTextureDegrades(const TrackerOptions& options, int frames,
+                                        double* last_residual_px) {
+  MovingCube scene(testing::OneCameraRig());
+  Tracker tracker(scene.rig(), scene.cube(), options);
+  tracker.Initialize(CubeAt(0));
+  const RigCamera& camera = scene.rig().cameras[0];
+  cv::RNG rng(7);
+  for (int k = 0; k < frames; ++k) {
+    cv::Mat image = scene.Images(k)[0].clone();
+    if (k >= 6) {
+      RenderBuffers buffers;
+      Render(scene.cube(), camera.intrinsics, camera.cam_from_world() * CubeAt(k),
+             camera.intrinsics.ImageRect(), RenderOptions(), &buffers);
+      cv::Mat noise(image.size(), CV_32FC3);
+      rng.fill(noise, cv::RNG::NORMAL, cv::Scalar::all(0.0), cv::Scalar::all(0.006 * (k - 5)));
+      cv::Mat noisy = image + noise;
+      noisy.copyTo(image, buffers.mask);
+    }
+    const TrackResult r = tracker.Track({image});
+    EXPECT_EQ(r.status, TrackStatus::kTracking) << "frame " << k << ": " << r.BriefReport();
+    EXPECT_LT(ErrorMm(r, k), 2.0) << "frame " << k << ": " << r.BriefReport();
+    *last_residual_px = r.summary.initial_residual_px;
+  }
+  return tracker.residual_reference_px();
+}
+
+TEST(TrackerFaults, TextureThatFitsWorseIsLearntFasterWhileTheSilhouetteVouches) {
+  // A texture whose fit worsens while the silhouette stays on its contour (a face of fine
+  // repeating pattern turning to a slant, in the held-out box_checker_fast) raises the
+  // reference residual at FailureOptions::vouched_reference_rate, so that the frames are
+  // judged against the floor they have now; at the slow rate it lags behind.
+  TrackerOptions vouched;
+  ASSERT_GT(vouched.failure.vouched_reference_rate, vouched.failure.residual_reference_rate);
+  TrackerOptions slow = vouched;
+  slow.failure.vouched_reference_rate = slow.failure.residual_reference_rate;
+  double last_vouched = 0.0, last_slow = 0.0;
+  const double reference_vouched = ReferenceWhileTheTextureDegrades(vouched, 20, &last_vouched);
+  const double reference_slow = ReferenceWhileTheTextureDegrades(slow, 20, &last_slow);
+  ASSERT_GT(reference_slow, 0.0);
+  EXPECT_GT(last_slow, 1.1 * reference_slow);  // the floor rose: the slow reference lags
+  EXPECT_GT(reference_vouched, 1.05 * reference_slow);
+  EXPECT_LT(std::abs(last_vouched - reference_vouched), std::abs(last_slow - reference_slow));
 }
 
 }  // namespace

@@ -79,6 +79,12 @@ void FailureOptions::Check() const {
                good_residual_ratio, bad_residual_ratio);
   UNSEEN_CHECK(residual_reference_rate > 0.0 && residual_reference_rate <= 1.0,
                "failure.residual_reference_rate {} must be in (0, 1]", residual_reference_rate);
+  UNSEEN_CHECK(vouched_reference_rate >= residual_reference_rate && vouched_reference_rate <= 1.0,
+               "failure.vouched_reference_rate {} must be in [residual_reference_rate {}, 1]",
+               vouched_reference_rate, residual_reference_rate);
+  UNSEEN_CHECK(vouched_region_residual_ratio > 0.0 && std::isfinite(vouched_region_residual_ratio),
+               "failure.vouched_region_residual_ratio {} must be > 0",
+               vouched_region_residual_ratio);
   UNSEEN_CHECK(min_reference_residual_px > 0.0 && std::isfinite(min_reference_residual_px),
                "failure.min_reference_residual_px {} must be > 0", min_reference_residual_px);
   UNSEEN_CHECK(good_residual_px >= 0.0 && bad_residual_px > good_residual_px,
@@ -281,6 +287,8 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"good_residual_ratio", YamlField(&fa.good_residual_ratio)},
         {"bad_residual_ratio", YamlField(&fa.bad_residual_ratio)},
         {"residual_reference_rate", YamlField(&fa.residual_reference_rate)},
+        {"vouched_reference_rate", YamlField(&fa.vouched_reference_rate)},
+        {"vouched_region_residual_ratio", YamlField(&fa.vouched_region_residual_ratio)},
         {"min_reference_residual_px", YamlField(&fa.min_reference_residual_px)},
         {"bad_residual_px", YamlField(&fa.bad_residual_px)},
         {"good_update_px", YamlField(&fa.good_update_px)},

@@ -32,7 +32,8 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
       "          photometric_coarse_min_update_px: 0.5, max_finest_px: 40000,\n"
       "          finest_hysteresis: 0.5, noise_stop_chi2: 0}\n"
       "predictor: {type: none, min_confidence: 0.4, confidence_power: 2}\n"
-      "failure: {lost_after_frames: 5, good_used_px: 3000, bad_residual_ratio: 2.0}\n"
+      "failure: {lost_after_frames: 5, good_used_px: 3000, bad_residual_ratio: 2.0,\n"
+      "          vouched_reference_rate: 0.5, vouched_region_residual_ratio: 1.2}\n"
       "frame_interval_s: 0.04\n"
       "threads: 2\n");
   EXPECT_FALSE(o.preprocess.use_linf);
@@ -56,6 +57,8 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
   EXPECT_EQ(o.failure.lost_after_frames, 5);
   EXPECT_DOUBLE_EQ(o.failure.good_used_px, 3000);
   EXPECT_DOUBLE_EQ(o.failure.bad_residual_ratio, 2.0);
+  EXPECT_DOUBLE_EQ(o.failure.vouched_reference_rate, 0.5);
+  EXPECT_DOUBLE_EQ(o.failure.vouched_region_residual_ratio, 1.2);
   EXPECT_DOUBLE_EQ(o.selection.block_min_share_ratio, 0.0);
   EXPECT_DOUBLE_EQ(o.frame_interval_s, 0.04);
   EXPECT_DOUBLE_EQ(o.selection.max_normal_flow_px, 1.22);  // untouched default
@@ -151,6 +154,11 @@ TEST(TrackerOptions, RejectsBadFilesNamingTheKey) {
   EXPECT_NE(message("pyramid: {resample_margin_px: 100}").find("pyramid.resample_margin_px"),
             std::string::npos);
   EXPECT_NE(message("failure: {min_area_ratio: 0.5, good_area_ratio: 0.4}").find("min_area_ratio"),
+            std::string::npos);
+  EXPECT_NE(message("failure: {vouched_reference_rate: 0.05}").find("failure.vouched_reference_rate"),
+            std::string::npos);
+  EXPECT_NE(message("failure: {vouched_region_residual_ratio: 0}")
+                .find("failure.vouched_region_residual_ratio"),
             std::string::npos);
   EXPECT_NE(message("failure: {area_memory_frames: -2}").find("failure.area_memory_frames"),
             std::string::npos);

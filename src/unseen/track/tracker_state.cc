@@ -141,17 +141,26 @@ TrackResult Tracker::Track(const Frame& input_frame) {
                                : r.summary.object_px;
     }
     // Each residual's reference follows the frames that fit about as well as it.
-    auto follow = [&](double value, double good_ratio, double* reference) {
+    auto follow = [&](double value, double good_ratio, double rate, double* reference) {
       if (*reference <= 0.0) {
         *reference = value;
       } else if (value < good_ratio * *reference) {
-        *reference += f.residual_reference_rate * (value - *reference);
+        *reference += rate * (value - *reference);
       }
     };
-    if (r.summary.region_counts.used >= f.min_region_lines && r.summary.region_residual > 0.0) {
-      follow(r.summary.region_residual, f.good_region_residual_ratio, &region_residual_reference_);
+    const bool silhouette_used =
+        r.summary.region_counts.used >= f.min_region_lines && r.summary.region_residual > 0.0;
+    // The silhouette vouches for the pose: the texture's floor is learnt faster
+    // (FailureOptions::vouched_reference_rate). Judged before its own reference moves.
+    const bool vouched = silhouette_used &&
+                         r.summary.region_counts.Agreement() >= options_.region.good_agreement &&
+                         RegionResidualRatio(r.summary) <= f.vouched_region_residual_ratio;
+    if (silhouette_used) {
+      follow(r.summary.region_residual, f.good_region_residual_ratio, f.residual_reference_rate,
+             &region_residual_reference_);
     }
-    follow(residual, f.good_residual_ratio, &residual_reference_px_);
+    follow(residual, f.good_residual_ratio,
+           vouched ? f.vouched_reference_rate : f.residual_reference_rate, &residual_reference_px_);
   }
   // The colour statistics learn from frames tracked with confidence by a plain alignment
   // (a search's result may come from another candidate than the last one aligned).
