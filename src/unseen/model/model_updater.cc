@@ -38,6 +38,8 @@ void ModelUpdateOptions::Check() const {
   UNSEEN_CHECK(refresh_frames >= 1, "update.refresh_frames {} must be >= 1", refresh_frames);
   UNSEEN_CHECK(min_confidence >= 0.0 && min_confidence <= 1.0,
                "update.min_confidence {} must be in [0, 1]", min_confidence);
+  UNSEEN_CHECK(refresh_fall_confidence >= 0.0 && refresh_fall_confidence <= 1.0,
+               "update.refresh_fall_confidence {} must be in [0, 1]", refresh_fall_confidence);
 }
 
 ModelUpdater::ModelUpdater(const Modeller* modeller, const ModelUpdateOptions& options)
@@ -104,12 +106,17 @@ std::optional<Mesh> ModelUpdater::AfterFrame(const Frame& frame, const Rigid3d& 
                                              double confidence, const Mesh& current,
                                              const cv::Mat& mask) {
   ++frames_since_model_;
+  const double previous_confidence = previous_confidence_;
+  previous_confidence_ = confidence;
   std::optional<Mesh> ready;
   if (pending_.valid() && pending_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
     ready = Collect(pending_.get());
   }
   if (options_.mode == ModelUpdateMode::kNone || pending_.valid() || ready) return ready;
-  if (!DueAfter(frames_since_model_, confidence)) return ready;
+  previous_confidence_ = previous_confidence;  // DueAfter judges against the frame before
+  const bool due = DueAfter(frames_since_model_, confidence);
+  previous_confidence_ = confidence;
+  if (!due) return ready;
   ++stats_.started;
   frames_since_model_ = 0;  // the next attempt after every_frames more, built or not
   if (!options_.asynchronous) {
@@ -125,7 +132,10 @@ std::optional<Mesh> ModelUpdater::AfterFrame(const Frame& frame, const Rigid3d& 
 
 bool ModelUpdater::AfterTracked(const Frame& frame, const TrackResult& result, Tracker* tracker,
                                 const cv::Mat& mask) {
-  if (result.status != TrackStatus::kTracking) return false;
+  if (result.status != TrackStatus::kTracking) {
+    previous_confidence_ = 0.0;
+    return false;
+  }
   std::optional<Mesh> next =
       AfterFrame(frame, result.world_from_obj, result.confidence, tracker->given_model(), mask);
   if (!next) return false;

@@ -42,6 +42,12 @@ struct ModelUpdateOptions {
   // refresh_confidence 0: only every_frames.
   double refresh_confidence = 0.9;
   int refresh_frames = 5;
+  // A confidence that falls through the refresh's window in one frame (the frame before at
+  // least refresh_confidence, this one below min_confidence) still starts that build when
+  // it is at least refresh_fall_confidence: otherwise no build may start while it goes on
+  // falling (a truck's 0.93 -> 0.79 -> ... -> 0.2). refresh_fall_confidence >=
+  // min_confidence: off.
+  double refresh_fall_confidence = 0.6;
   bool asynchronous = true;     // build beside the tracking (false: within the frame)
   void Check() const;
 };
@@ -95,10 +101,14 @@ class ModelUpdater {
 
  private:
   bool DueAfter(int frames_since_model, double confidence) const {
-    if (confidence < options_.min_confidence) return false;
-    return frames_since_model >= options_.every_frames ||
-           (frames_since_model >= options_.refresh_frames &&
-            confidence < options_.refresh_confidence);
+    const bool refresh = frames_since_model >= options_.refresh_frames &&
+                         confidence < options_.refresh_confidence;
+    if (confidence < options_.min_confidence) {
+      // Fell through the refresh's window in one frame.
+      return refresh && previous_confidence_ >= options_.refresh_confidence &&
+             confidence >= options_.refresh_fall_confidence;
+    }
+    return frames_since_model >= options_.every_frames || refresh;
   }
   std::optional<Mesh> Collect(ModelBuild build);
   // Modeller::Build, then with kIncremental the fusion of its depth (on the build's thread:
@@ -109,6 +119,7 @@ class ModelUpdater {
   const Modeller& modeller_;
   ModelUpdateOptions options_;
   int frames_since_model_ = 0;
+  double previous_confidence_ = 0.0;  // of the last frame tracked (0 after a lost one)
   std::unique_ptr<ModelFusion> fusion_;  // kIncremental
   std::future<ModelBuild> pending_;
   ModelUpdateStats stats_;

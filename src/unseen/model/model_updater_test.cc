@@ -68,6 +68,28 @@ TEST_F(ModelUpdates, AFallingConfidenceBringsTheNextBuildForward) {
   EXPECT_TRUE(updater.AfterFrame(scene_.frame, scene_.world_from_obj, 0.85, model_).has_value());
   EXPECT_EQ(updater.stats().started, 1);
 
+  // A confidence that falls through the window in one frame (1.0, then 0.7 < min_confidence
+  // 0.8) still refreshes the model when it is at least refresh_fall_confidence; one that
+  // was already inside the window, or falls below that, does not.
+  ASSERT_LT(update_.refresh_fall_confidence, 0.7);
+  ASSERT_GT(update_.refresh_fall_confidence, 0.5);
+  ModelUpdater falling(modeller_.get(), update_);
+  for (double confidence : {1.0, 1.0, 1.0, 1.0}) {
+    EXPECT_FALSE(falling.AfterFrame(scene_.frame, scene_.world_from_obj, confidence, model_));
+  }
+  EXPECT_TRUE(falling.AfterFrame(scene_.frame, scene_.world_from_obj, 0.7, model_).has_value());
+  ModelUpdater within(modeller_.get(), update_);
+  for (double confidence : {1.0, 1.0, 1.0, 0.85}) {  // 0.85: too soon after the model
+    EXPECT_FALSE(within.AfterFrame(scene_.frame, scene_.world_from_obj, confidence, model_));
+  }
+  EXPECT_FALSE(within.AfterFrame(scene_.frame, scene_.world_from_obj, 0.7, model_));
+  update_.refresh_fall_confidence = update_.min_confidence;  // off
+  ModelUpdater no_fall(modeller_.get(), update_);
+  for (double confidence : {1.0, 1.0, 1.0, 1.0}) {
+    EXPECT_FALSE(no_fall.AfterFrame(scene_.frame, scene_.world_from_obj, confidence, model_));
+  }
+  EXPECT_FALSE(no_fall.AfterFrame(scene_.frame, scene_.world_from_obj, 0.7, model_));
+
   // Without the refresh, only every_frames.
   update_.refresh_confidence = 0.0;
   ModelUpdater every_30(modeller_.get(), update_);
@@ -157,6 +179,9 @@ TEST_F(ModelUpdates, NoneNeverRebuildsAndBadOptionsAreErrors) {
   EXPECT_THROW(update_.Check(), Error);
   update_.refresh_confidence = 0.9;
   update_.refresh_frames = 0;
+  EXPECT_THROW(update_.Check(), Error);
+  update_.refresh_frames = 5;
+  update_.refresh_fall_confidence = -0.1;
   EXPECT_THROW(update_.Check(), Error);
 }
 

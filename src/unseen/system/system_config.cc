@@ -95,6 +95,7 @@ YamlSection UpdateSection(ModelUpdateOptions* o) {
           {"min_confidence", YamlField(&o->min_confidence)},
           {"refresh_confidence", YamlField(&o->refresh_confidence)},
           {"refresh_frames", YamlField(&o->refresh_frames)},
+          {"refresh_fall_confidence", YamlField(&o->refresh_fall_confidence)},
           {"asynchronous", YamlField(&o->asynchronous)}};
 }
 
