@@ -106,17 +106,13 @@ std::optional<Mesh> ModelUpdater::AfterFrame(const Frame& frame, const Rigid3d& 
                                              double confidence, const Mesh& current,
                                              const cv::Mat& mask) {
   ++frames_since_model_;
-  const double previous_confidence = previous_confidence_;
-  previous_confidence_ = confidence;
+  const double previous_confidence = std::exchange(previous_confidence_, confidence);
   std::optional<Mesh> ready;
   if (pending_.valid() && pending_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
     ready = Collect(pending_.get());
   }
   if (options_.mode == ModelUpdateMode::kNone || pending_.valid() || ready) return ready;
-  previous_confidence_ = previous_confidence;  // DueAfter judges against the frame before
-  const bool due = DueAfter(frames_since_model_, confidence);
-  previous_confidence_ = confidence;
-  if (!due) return ready;
+  if (!DueAfter(frames_since_model_, confidence, previous_confidence)) return ready;
   ++stats_.started;
   frames_since_model_ = 0;  // the next attempt after every_frames more, built or not
   if (!options_.asynchronous) {

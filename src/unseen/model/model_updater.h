@@ -94,18 +94,20 @@ class ModelUpdater {
   // since the last, confident enough): what only a build needs (a mask) is made then only.
   bool BuildsNext(double confidence) const {
     return options_.mode != ModelUpdateMode::kNone && !pending_.valid() &&
-           DueAfter(frames_since_model_ + 1, confidence);
+           DueAfter(frames_since_model_ + 1, confidence, previous_confidence_);
   }
 
   const ModelUpdateStats& stats() const { return stats_; }
 
  private:
-  bool DueAfter(int frames_since_model, double confidence) const {
+  // Whether a frame `frames_since_model` frames after the last build, tracked at
+  // `confidence` after one at `previous_confidence`, starts a build.
+  bool DueAfter(int frames_since_model, double confidence, double previous_confidence) const {
     const bool refresh = frames_since_model >= options_.refresh_frames &&
                          confidence < options_.refresh_confidence;
     if (confidence < options_.min_confidence) {
       // Fell through the refresh's window in one frame.
-      return refresh && previous_confidence_ >= options_.refresh_confidence &&
+      return refresh && previous_confidence >= options_.refresh_confidence &&
              confidence >= options_.refresh_fall_confidence;
     }
     return frames_since_model >= options_.every_frames || refresh;
