@@ -13,6 +13,8 @@ void LiveAppearanceOptions::Check() const {
                "live_appearance.min_confidence {} must be in [0, 1]", min_confidence);
   UNSEEN_CHECK(refresh_frames >= 1, "live_appearance.refresh_frames {} must be >= 1",
                refresh_frames);
+  UNSEEN_CHECK(refresh_share_ratio >= 0.0 && refresh_share_ratio <= 1.0,
+               "live_appearance.refresh_share_ratio {} must be in [0, 1]", refresh_share_ratio);
   UNSEEN_CHECK(margin_px >= 0 && margin_px <= 64, "live_appearance.margin_px {} must be in [0, 64]",
                margin_px);
   UNSEEN_CHECK(occlusion_tolerance > 0.0 && std::isfinite(occlusion_tolerance),

@@ -166,6 +166,51 @@ TEST_F(LiveAppearance, AModelWhoseSilhouetteCannotConfirmTheGivenPoseTakesTheFra
   EXPECT_THROW(ParseTrackerOptions("live_appearance: {when_silhouette_fails: 3}"), Error);
 }
 
+TEST_F(LiveAppearance, AHeldTextureIsTakenAgainOnceItNoLongerFits) {
+  TrackerOptions options;
+  options.live_appearance.enabled = true;
+  ASSERT_GT(options.live_appearance.refresh_frames, 10);
+  Tracker tracker(rig_, testing::FlatCube(), options);
+  tracker.Initialize(CubePose());
+  tracker.Track({Image(CubePose())});
+  ASSERT_EQ(tracker.model().projectors.size(), 1u);
+  const Rigid3d first_projector = tracker.model().projectors[0].cam_from_obj;
+  auto projector_moved = [&] {
+    return Difference(tracker.model().projectors[0].cam_from_obj, first_projector).rotation_rad >
+           0.1 * kDeg;
+  };
+  // The cube turns a degree a frame: the first frame's colours still fit and are held (taken
+  // every frame, the pose would walk with them).
+  int k = 1;
+  for (; k <= 4; ++k) {
+    const Rigid3d truth = CubePose(k * kDeg);
+    const TrackResult r = tracker.Track({Image(truth)});
+    EXPECT_EQ(r.status, TrackStatus::kTracking) << k << ": " << r.BriefReport();
+    EXPECT_LT(Difference(r.world_from_obj, truth).rotation_rad, 0.5 * kDeg) << k << ": " << r.BriefReport();
+    EXPECT_FALSE(projector_moved()) << k;
+  }
+  // The print fades into another (the light or the view moved on): the held colours are
+  // taken again long before refresh_frames, and the pose stays with the cube.
+  const cv::Mat print = textured_.materials[0].texture.clone();
+  cv::Mat blotches(8, 8, CV_32FC3), other;
+  cv::RNG(5).fill(blotches, cv::RNG::UNIFORM, 0.0, 1.0);
+  cv::resize(blotches, other, print.size(), 0.0, 0.0, cv::INTER_CUBIC);
+  bool taken_again = false;
+  for (int step = 1; step <= 8; ++step, ++k) {
+    const double a = std::min(1.0, 0.2 * step);
+    cv::addWeighted(print, 1.0 - a, other, a, 0.0, textured_.materials[0].texture);
+    const Rigid3d truth = CubePose(k * kDeg);
+    const TrackResult r = tracker.Track({Image(truth)});
+    EXPECT_EQ(r.status, TrackStatus::kTracking) << k << ": " << r.BriefReport();
+    const PoseDifference e = Difference(r.world_from_obj, truth);
+    EXPECT_LT(e.translation, 0.004) << k << ": " << r.BriefReport();
+    EXPECT_LT(e.rotation_rad, 0.5 * kDeg) << k << ": " << r.BriefReport();
+    taken_again = taken_again || projector_moved();
+  }
+  EXPECT_TRUE(taken_again);
+  EXPECT_LT(k, options.live_appearance.refresh_frames);
+}
+
 TEST(LiveAppearanceOptions, CheckRejectsBadValues) {
   LiveAppearanceOptions o;
   EXPECT_NO_THROW(o.Check());
@@ -180,6 +225,12 @@ TEST(LiveAppearanceOptions, CheckRejectsBadValues) {
   o = LiveAppearanceOptions();
   o.occlusion_tolerance = -1.0;
   EXPECT_THROW(o.Check(), Error);
+  o = LiveAppearanceOptions();
+  o.refresh_share_ratio = 1.5;
+  EXPECT_THROW(o.Check(), Error);
+  EXPECT_DOUBLE_EQ(
+      ParseTrackerOptions("live_appearance: {refresh_share_ratio: 0.5}").live_appearance.refresh_share_ratio,
+      0.5);
 }
 
 }  // namespace

@@ -283,6 +283,16 @@ class Tracker {
   // The model with `frame`'s colours projected onto it from `world_from_obj` becomes the
   // rendered one (photometric modality on); false when no camera sees it.
   bool TakeLiveAppearance(const Frame& frame, const Rigid3d& world_from_obj);
+  // The model with `frame`'s colours projected onto it from `world_from_obj`; null when no
+  // camera sees it.
+  std::shared_ptr<const Mesh> CaptureLiveAppearance(const Frame& frame,
+                                                    const Rigid3d& world_from_obj) const;
+  // `live` (a capture) becomes the rendered model.
+  void AdoptLiveAppearance(std::shared_ptr<const Mesh> live);
+  // A held texture (LiveAppearanceOptions::refresh_frames > 1) that no longer fits this
+  // frame (its share fell below refresh_share_ratio of its best): the frame is aligned
+  // again with the last tracked frame's colours, which become the held ones.
+  bool HeldAppearanceFaded(const TrackResult& r) const;
   // The model has no colours of its own, and the silhouette could judge colours taken from
   // the frames (LiveAppearanceOptions).
   bool MayTakeLiveAppearance() const;
@@ -312,6 +322,9 @@ class Tracker {
   // it takes them from the tracked frames (LiveAppearanceOptions).
   bool live_appearance_ = false;
   int frames_since_capture_ = 0;
+  double best_live_share_ = 0.0;  // the best photometric share since the last capture
+  // The last confident frame's colours while an older capture is held (refresh_frames > 1).
+  std::shared_ptr<const Mesh> latest_live_;
   // The model's own colours: the best photometric share of a confident frame since the
   // start, and the confident frames in a row below LiveAppearanceOptions::poor_fit_share.
   double best_share_ = 0.0;

@@ -24,6 +24,8 @@ void Tracker::StartWithGivenModel() {
   live_appearance_ = po.enabled && lo.enabled && options_.region.enabled &&
                      (!has_appearance || lo.always);
   frames_since_capture_ = 0;
+  best_live_share_ = 0.0;
+  latest_live_.reset();
   photometric_demoted_ = false;
   dragged_at_start_ = false;
   best_share_ = 0.0;
@@ -57,19 +59,35 @@ bool Tracker::MayTakeLiveAppearance() const {
          !given_model_->HasAppearance();
 }
 
+bool Tracker::HeldAppearanceFaded(const TrackResult& r) const {
+  return live_appearance_ && model_ != given_model_ && latest_live_ && latest_live_ != model_ &&
+         (r.summary.share < options_.live_appearance.refresh_share_ratio * best_live_share_ ||
+          r.confidence < options_.reacquisition.doubtful_confidence);
+}
+
 void Tracker::UpdateLiveAppearance(const Frame& frame, const TrackResult& r) {
   const LiveAppearanceOptions& lo = options_.live_appearance;
   if (!live_appearance_ || r.status != TrackStatus::kTracking || r.confidence < lo.min_confidence) {
     return;
   }
-  if (model_ != given_model_ && ++frames_since_capture_ < lo.refresh_frames) return;
-  TakeLiveAppearance(frame, r.world_from_obj);
+  if (model_ == given_model_ || lo.refresh_frames <= 1) {
+    TakeLiveAppearance(frame, r.world_from_obj);
+    return;
+  }
+  // A texture held over frames: the latest one is kept aside for a frame it no longer fits.
+  best_live_share_ = std::max(best_live_share_, r.summary.share);
+  latest_live_ = CaptureLiveAppearance(frame, r.world_from_obj);
+  const bool faded = r.summary.share < lo.refresh_share_ratio * best_live_share_;
+  if ((++frames_since_capture_ >= lo.refresh_frames || faded) && latest_live_) {
+    AdoptLiveAppearance(latest_live_);
+  }
 }
 
-bool Tracker::TakeLiveAppearance(const Frame& frame, const Rigid3d& world_from_obj) {
+std::shared_ptr<const Mesh> Tracker::CaptureLiveAppearance(const Frame& frame,
+                                                           const Rigid3d& world_from_obj) const {
   const LiveAppearanceOptions& lo = options_.live_appearance;
-  Mesh live = *given_model_;
-  live.projectors.clear();
+  auto live = std::make_shared<Mesh>(*given_model_);
+  live->projectors.clear();
   const float tolerance_m = static_cast<float>(lo.occlusion_tolerance * sphere_radius_);
   for (int c = 0; c < rig_.size(); ++c) {
     if (frame.images[c].empty()) continue;
@@ -80,18 +98,29 @@ bool Tracker::TakeLiveAppearance(const Frame& frame, const Rigid3d& world_from_o
     std::optional<Projector> p = CaptureProjector(*given_model_, camera, cam_from_obj,
                                                   frame.images[c], rect->Grow(lo.margin_px),
                                                   tolerance_m);
-    if (p) live.projectors.push_back(std::move(*p));
+    if (p) live->projectors.push_back(std::move(*p));
   }
-  if (live.projectors.empty()) return false;
+  if (live->projectors.empty()) return nullptr;
+  return live;
+}
+
+bool Tracker::TakeLiveAppearance(const Frame& frame, const Rigid3d& world_from_obj) {
+  std::shared_ptr<const Mesh> live = CaptureLiveAppearance(frame, world_from_obj);
+  if (!live) return false;
+  AdoptLiveAppearance(std::move(live));
+  return true;
+}
+
+void Tracker::AdoptLiveAppearance(std::shared_ptr<const Mesh> live) {
   if (model_ == given_model_) {
     UNSEEN_LOG_DEBUG("tracker: the model takes its colours from the tracked frames");
     residual_reference_px_ = 0.0;  // the fit to the given colours says nothing of these
   }
-  model_ = std::make_shared<const Mesh>(std::move(live));
+  model_ = std::move(live);
   use_photometric_ = true;
   photometric_demoted_ = false;  // colours from the frames have a weight of their own
   frames_since_capture_ = 0;
-  return true;
+  best_live_share_ = 0.0;
 }
 
 }  // namespace unseen

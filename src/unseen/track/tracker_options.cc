@@ -374,6 +374,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"always", YamlField(&la.always)},
         {"min_confidence", YamlField(&la.min_confidence)},
         {"refresh_frames", YamlField(&la.refresh_frames)},
+        {"refresh_share_ratio", YamlField(&la.refresh_share_ratio)},
         {"margin_px", YamlField(&la.margin_px)},
         {"occlusion_tolerance", YamlField(&la.occlusion_tolerance)},
         {"photometric_weight", YamlField(&la.photometric_weight)},

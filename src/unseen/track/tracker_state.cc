@@ -88,6 +88,17 @@ TrackResult Tracker::Track(const Frame& input_frame) {
     r = AlignPredicted(frame, predicted);
     r.summary.times += first_times;
   }
+  if (!search && HeldAppearanceFaded(r)) {
+    // The held texture no longer fits (the view or the light moved on): the last tracked
+    // frame's colours align this one.
+    UNSEEN_LOG_DEBUG("tracker: frame {}: the held colours fit {:.2f} of their best {:.2f}; "
+                     "aligned again with the last frame's",
+                     frame.frame_id, r.summary.share, best_live_share_);
+    AdoptLiveAppearance(latest_live_);
+    const StageTimes first_times = r.summary.times;
+    r = AlignPredicted(frame, predicted);
+    r.summary.times += first_times;
+  }
   const bool first_frame = learn_from_start_;
   learn_from_start_ = false;
   if (status_ == TrackStatus::kTracking && options_.reacquisition.seed_when_doubtful &&
