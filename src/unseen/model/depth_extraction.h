@@ -54,6 +54,14 @@ struct PlaneSweepOptions {
   // steps of that level's grid of the planes found at the 3x3 pixels about it one level up.
   int levels = 3;
   int band_planes = 4;
+  // At the coarsest level, planes behind the depth range are swept too (at that level's
+  // spacing, out to max_depth_m): a pixel that matches behind the range as well as inside
+  // it (within `uniqueness`) is the background seen past the object, or ambiguous, and
+  // stays unmeasured. Swept over the range alone, a
+  // textured background finds some plane inside it that matches well enough and joins the
+  // object at its depth (held-out three-camera rig before a butterfly photo: the model's
+  // triangles ran down the photo's stripes).
+  bool search_behind = true;
   int threads = 0;  // threads the sweep's tiles are spread over (the caller's included); 0: all
   void Check() const;
 };

@@ -110,8 +110,10 @@ INSTANTIATE_TEST_SUITE_P(AllSources, DepthSources,
 // tiled every 40 mm (16 px in the images) with the same random pattern: over the cube's
 // depth band alone (0.55-0.7 m, disparities 46-58) the wall matches one tile over, at
 // disparity 48 (0.67 m), and joins the object; searched past the band, it matches at its
-// own disparity 32 and is dropped.
-TEST(DepthExtraction, StereoDoesNotMistakeATiledWallForTheObject) {
+// own disparity 32 and is dropped. The plane sweep likewise, by its planes behind the band
+// (at its coarsest level, where the tiles are 4 px: less than half the wall's pixels
+// remain, 16 700 -> 7 000).
+TEST(DepthExtraction, ImageSourcesDoNotMistakeATiledWallForTheObject) {
   const PinholeCamera cam = PinholeCamera::Centered(320, 240, 400.0);
   Rig rig;
   rig.cameras.push_back({"left", cam, Rigid3d()});
@@ -145,11 +147,12 @@ TEST(DepthExtraction, StereoDoesNotMistakeATiledWallForTheObject) {
   }
   const std::optional<PixelRect> region = cam.SphereRect(world_from_obj.translation(), 0.12);
   ASSERT_TRUE(region.has_value());
-  auto count = [&](bool search_behind, int* on_object, int* off_object) {
+  auto count = [&](DepthSourceKind kind, bool search_behind, int* on_object, int* off_object) {
     DepthExtractionOptions options;
-    options.source = DepthSourceKind::kStereo;
+    options.source = kind;
     options.stereo.search_behind = search_behind;
-    const DepthMap map = StereoDepth(rig, 0, options).Extract(frame, *region, 0.55, 0.7);
+    options.plane_sweep.search_behind = search_behind;
+    const DepthMap map = MakeDepthSource(rig, 0, options)->Extract(frame, *region, 0.55, 0.7);
     *on_object = *off_object = 0;
     for (int y = 0; y < cam.height; ++y) {
       for (int x = 0; x < cam.width; ++x) {
@@ -158,12 +161,15 @@ TEST(DepthExtraction, StereoDoesNotMistakeATiledWallForTheObject) {
       }
     }
   };
-  int band_on = 0, band_off = 0, behind_on = 0, behind_off = 0;
-  count(false, &band_on, &band_off);
-  count(true, &behind_on, &behind_off);
-  EXPECT_GT(band_off, 5000) << "the band-only search no longer mistakes the wall";
-  EXPECT_LT(behind_off, band_off / 10);
-  EXPECT_GT(behind_on, band_on / 2) << "the cube is still measured";
+  for (DepthSourceKind kind : {DepthSourceKind::kStereo, DepthSourceKind::kPlaneSweep}) {
+    SCOPED_TRACE(ToString(kind));
+    int band_on = 0, band_off = 0, behind_on = 0, behind_off = 0;
+    count(kind, false, &band_on, &band_off);
+    count(kind, true, &behind_on, &behind_off);
+    EXPECT_GT(band_off, 5000) << "the band-only search no longer mistakes the wall";
+    EXPECT_LT(behind_off, kind == DepthSourceKind::kStereo ? band_off / 10 : band_off / 2);
+    EXPECT_GT(behind_on, band_on / 2) << "the cube is still measured";
+  }
 }
 
 TEST(DepthExtraction, TheNaturalSourceFollowsTheRig) {

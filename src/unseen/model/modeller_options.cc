@@ -208,6 +208,7 @@ ModellerOptions FromYaml(const YAML::Node& root, const std::string& what, Modell
         {"smoothness", YamlField(&ps.smoothness)},
         {"levels", YamlField(&ps.levels)},
         {"band_planes", YamlField(&ps.band_planes)},
+        {"search_behind", YamlField(&ps.search_behind)},
         {"threads", YamlField(&ps.threads)}}},
       {"stereo",
        {{"num_disparities", YamlField(&st.num_disparities)},

@@ -555,11 +555,36 @@ DepthMap PlaneSweepDepth::Extract(const Frame& frame, const PixelRect& roi, doub
   const std::vector<float> volume = CostVolume(levels[top], planes, top_region, 0, top_stride,
                                                top_count, window, num_best, &pool);
   const cv::Mat label = SmoothLabels(volume, top_count, top_region.size(), o);
+  // Planes behind the range (negative plane indices: inverse depths below inv_far), out to
+  // the farthest depth accepted: each pixel's best cost there.
+  std::vector<float> behind_best;
+  const double inv_farthest = 1.0 / options_.max_depth_m;
+  const int behind_count =
+      o.search_behind && planes.inv_far > inv_farthest
+          ? std::min(64, static_cast<int>((planes.inv_far - inv_farthest) /
+                                          (planes.inv_step * top_stride)))
+          : 0;
+  if (behind_count > 0) {
+    const std::vector<float> behind =
+        CostVolume(levels[top], planes, top_region, -behind_count * top_stride, top_stride,
+                   behind_count, window, num_best, &pool);
+    behind_best.resize(top_region.area());
+    for (size_t i = 0; i < behind_best.size(); ++i) {
+      behind_best[i] = *std::min_element(behind.begin() + i * behind_count,
+                                         behind.begin() + (i + 1) * behind_count);
+    }
+  }
   PlaneMap found(top_region.size(), CV_32FC1, cv::Scalar(-1.0f));
   for (int y = 0; y < top_region.height; ++y) {
     for (int x = 0; x < top_region.width; ++x) {
       const int i = y * top_region.width + x;
       if (top == 0 && out.texturedness.at<float>(y + r.y0, x + r.x0) < min_t) continue;
+      if (!behind_best.empty() &&
+          behind_best[i] < volume[static_cast<size_t>(i) * top_count +
+                                  static_cast<int>(label.at<float>(y, x))] +
+                               o.uniqueness) {
+        continue;  // the background: matched behind the object's range as well or better
+      }
       const float index = SubPlaneAt(&volume[static_cast<size_t>(i) * top_count], top_count,
                                      static_cast<int>(label.at<float>(y, x)), 0, top_count - 1, o);
       if (!std::isfinite(index)) continue;
