@@ -1,6 +1,7 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/model/depth_extraction.h"
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
@@ -112,8 +113,15 @@ DepthSourceKind NaturalDepthSource(const Rig& rig, int reference, bool has_depth
   const RigCamera& other = rig.cameras[reference == 0 ? 1 : 0];
   // The baseline in the reference camera's frame: the matcher wants it across the rows.
   const Eigen::Vector3d baseline = ref.cam_from_world() * other.world_from_cam.translation();
-  return std::abs(baseline.x()) >= std::abs(baseline.y()) ? DepthSourceKind::kStereo
-                                                          : DepthSourceKind::kPlaneSweep;
+  // The angle between the optical axes (a pair toed in towards the object).
+  const Eigen::Vector3d ref_axis = ref.world_from_cam.rotation() * Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d other_axis = other.world_from_cam.rotation() * Eigen::Vector3d::UnitZ();
+  const double convergence_deg =
+      std::acos(std::clamp(ref_axis.dot(other_axis), -1.0, 1.0)) * 180.0 / M_PI;
+  return std::abs(baseline.x()) >= std::abs(baseline.y()) &&
+                 convergence_deg <= kMaxStereoConvergenceDeg
+             ? DepthSourceKind::kStereo
+             : DepthSourceKind::kPlaneSweep;
 }
 
 std::unique_ptr<DepthSource> MakeDepthSource(const Rig& rig, int reference,

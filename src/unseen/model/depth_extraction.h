@@ -141,10 +141,13 @@ class DepthSource {
 };
 
 // The source a rig calls for when none is chosen: its depth images (`has_depth`); else
-// stereo for two cameras side by side (rectification and semi-global matching, which
-// searches past the object's depth band); else the plane sweep over every camera (three or
-// more, or a pair stacked vertically); kSensor for one camera without depth (which
+// stereo for two cameras side by side looking about the same way (rectification and
+// semi-global matching, which searches past the object's depth band); else the plane sweep
+// over every camera (three or more, a pair stacked vertically, or a pair whose optical axes
+// part by more than kMaxStereoConvergenceDeg: rectified, the views of a wide pair are
+// sheared too far for block matching); kSensor for one camera without depth (which
 // MakeDepthSource then refuses).
+inline constexpr double kMaxStereoConvergenceDeg = 20.0;
 DepthSourceKind NaturalDepthSource(const Rig& rig, int reference, bool has_depth);
 
 // The source options.source for `rig` seen from camera `reference` (checked: the plane

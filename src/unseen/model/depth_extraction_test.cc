@@ -184,6 +184,16 @@ TEST(DepthExtraction, TheNaturalSourceFollowsTheRig) {
   stacked.cameras[1].world_from_cam =
       Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.01, 0.08, 0.0));
   EXPECT_EQ(NaturalDepthSource(stacked, 0, false), DepthSourceKind::kPlaneSweep);
+  // Toed in towards the object: 10 degrees still for stereo, 35 for the plane sweep.
+  Rig toed = pair;
+  for (const double deg : {10.0, 35.0}) {
+    toed.cameras[1].world_from_cam = Rigid3d(
+        Eigen::Quaterniond(Eigen::AngleAxisd(-deg * M_PI / 180.0, Eigen::Vector3d::UnitY())),
+        pair.cameras[1].world_from_cam.translation());
+    EXPECT_EQ(NaturalDepthSource(toed, 0, false),
+              deg < kMaxStereoConvergenceDeg ? DepthSourceKind::kStereo : DepthSourceKind::kPlaneSweep)
+        << deg;
+  }
   pair.cameras.pop_back();
   EXPECT_EQ(NaturalDepthSource(pair, 0, false), DepthSourceKind::kSensor);
 }
