@@ -109,6 +109,67 @@ TEST_F(ModellerScene, TheInitialFrameSitsJustBehindTheRegionsSurface) {
   EXPECT_FALSE(modeller.InitialPose(no_depth, ObjectRegion(0)).has_value());
 }
 
+// Three cameras 35 degrees apart on a circle of 0.65 m about a 60 mm lettered cube, toed in
+// towards it, before a wall of black and white blobs 1.8 m away. Placing the frame searches
+// the whole depth range (0.1-5 m): with the object's 64 planes, neighbouring planes are
+// pixels apart at the cube for these baselines, the match aliases and the origin lands
+// 7 cm off (256 planes: 1.3 cm).
+TEST(ModellerInitialPose, AWideRigPlacesTheFrameAtTheObjectsDepth) {
+  const PinholeCamera cam = PinholeCamera::Centered(320, 240, 400.0);
+  const Eigen::Vector3d centre(0.0, 0.0, 0.65);
+  Rig rig;
+  for (const double deg : {0.0, 35.0, -35.0}) {
+    const Eigen::Quaterniond turn(Eigen::AngleAxisd(deg * kDeg, Eigen::Vector3d::UnitY()));
+    // The camera on the circle about `centre`, its optical axis through it.
+    const Eigen::Vector3d position = centre - turn * Eigen::Vector3d(0.0, 0.0, 0.65);
+    rig.cameras.push_back({fmt::format("cam{}", rig.size()), cam, Rigid3d(turn, position)});
+  }
+  const Mesh cube = MakeLetteredCube(0.06, 128);
+  const Rigid3d world_from_obj(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitY()) *
+                                   Eigen::Quaterniond(Eigen::AngleAxisd(-0.3, Eigen::Vector3d::UnitX())),
+                               centre);
+  // The wall: black and white blobs with fine speckle (a high-contrast photo).
+  cv::Mat noise(30, 40, CV_32FC1), blobs, speckle(600, 800, CV_32FC1);
+  cv::RNG rng(3);
+  rng.fill(noise, cv::RNG::UNIFORM, 0.0, 1.0);
+  cv::resize(noise, blobs, speckle.size(), 0.0, 0.0, cv::INTER_CUBIC);
+  rng.fill(speckle, cv::RNG::UNIFORM, 0.0, 0.3);
+  cv::Mat grey = (blobs > 0.5) / 255;
+  grey.convertTo(grey, CV_32FC1, 0.7);
+  grey += speckle;
+  Mesh wall;
+  wall.vertices = {{-2.0f, -1.5f, 0.0f}, {2.0f, -1.5f, 0.0f}, {2.0f, 1.5f, 0.0f}, {-2.0f, 1.5f, 0.0f}};
+  wall.triangles = {{0, 2, 1}, {0, 3, 2}};
+  wall.uvs = {{0.0f, 1.0f}, {1.0f, 1.0f}, {1.0f, 0.0f}, {0.0f, 0.0f}};
+  Material paper;
+  cv::cvtColor(grey, paper.texture, cv::COLOR_GRAY2BGR);
+  wall.materials = {paper};
+  wall.triangle_materials = {0, 0};
+  const Rigid3d world_from_wall(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, 0, 1.8));
+  Frame frame;
+  for (const RigCamera& c : rig.cameras) {
+    RenderBuffers behind, seen;
+    Render(wall, cam, c.cam_from_world() * world_from_wall, cam.ImageRect(), RenderOptions(),
+           &behind);
+    Render(cube, cam, c.cam_from_world() * world_from_obj, cam.ImageRect(), RenderOptions(), &seen);
+    cv::Mat image = behind.color.clone();
+    seen.color.copyTo(image, seen.mask);
+    frame.images.push_back(image);
+  }
+  const std::optional<PixelRect> region = cam.SphereRect(centre, 0.09);
+  ASSERT_TRUE(region.has_value());
+  auto depth_error = [&](int planes) {
+    ModellerOptions options;
+    options.depth.source = DepthSourceKind::kPlaneSweep;
+    options.initial_pose_planes = planes;
+    const std::optional<Rigid3d> pose = Modeller(rig, 0, options).InitialPose(frame, *region);
+    return pose ? std::abs(pose->translation().z() - centre.z()) : 1e9;
+  };
+  // The visible surface is 3-4 cm before the cube's centre, the origin 2 cm behind it.
+  EXPECT_LT(depth_error(ModellerOptions().initial_pose_planes), 0.03);
+  EXPECT_GT(depth_error(64), 0.03) << "64 planes no longer alias on this rig";
+}
+
 TEST_F(ModellerScene, SegmentationDropsTheFloorTheObjectStandsOn) {
   const RigScene& s = *scene_;
   const RigCamera& cam = s.rig.cameras[0];
