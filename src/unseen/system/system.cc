@@ -83,7 +83,11 @@ bool System::Start(const Frame& frame, const RegionCandidate& region, const cv::
     return true;
   }
   // An unknown object: its frame at the region (SPEC 4.4) and a first model there.
-  const cv::Mat mask = labels.empty() ? cv::Mat() : cv::Mat(labels == region.label);
+  const bool image_depth = modeller_->options().depth.source != DepthSourceKind::kSensor;
+  const cv::Mat mask =
+      labels.empty() || (image_depth && !options_.first_model_from_motion_with_image_depth)
+          ? cv::Mat()
+          : cv::Mat(labels == region.label);
   const std::optional<Rigid3d> start = modeller_->InitialPose(frame, region.box, mask);
   if (!start) {
     step->note = "no depth measured in the region: cannot place the object";

@@ -32,6 +32,8 @@ YamlSection SystemSection(SystemOptions* o) {
   return {{"regions", YamlEnumField(&o->regions, &ParseRegionSource)},
           {"reselect_after_lost_frames", YamlField(&o->reselect_after_lost_frames)},
           {"rebuild_from_tracked_motion", YamlField(&o->rebuild_from_tracked_motion)},
+          {"first_model_from_motion_with_image_depth",
+           YamlField(&o->first_model_from_motion_with_image_depth)},
           {"rebuild_min_interest", YamlField(&o->rebuild_min_interest)}};
 }
 
