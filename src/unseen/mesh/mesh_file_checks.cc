@@ -324,6 +324,18 @@ void CheckColladaText(const std::string& path) {
                    name, *value, text.size());
     }
   }
+  // A <polylist> without its polygon sizes makes assimp dereference a null pointer.
+  for (size_t at = text.find("<polylist"); at != std::string::npos;
+       at = text.find("<polylist", at + 1)) {
+    const size_t name_end = at + 9;
+    if (name_end >= text.size() || (text[name_end] != '>' && !IsBlank(text[name_end]))) continue;
+    const size_t open_end = text.find('>', name_end);
+    if (open_end == std::string::npos || text[open_end - 1] == '/') continue;
+    const size_t end = std::min(text.find("</polylist", open_end), text.size());
+    const size_t sizes = text.find("<vcount>", open_end);
+    UNSEEN_CHECK(sizes != std::string::npos && sizes < end,
+                 "{}: <polylist> without a <vcount> element (its polygon sizes)", path);
+  }
   // Polygon sizes: assimp reserves what they say.
   for (size_t at = text.find("<vcount>"); at != std::string::npos;
        at = text.find("<vcount>", at + 1)) {
@@ -579,6 +591,18 @@ std::optional<PlyFaceTexcoords> ReadPlyBody(const std::string& path) {
                    "{}: PLY line '{}' holds a non-number or fewer values than its element's "
                    "properties",
                    path, instance.str().substr(0, 80));
+      // assimp reads an integer property's digits up to the first other character: a value
+      // such as "8446744070739.1e-320616" (0 as a number) is a list of 8e12 entries to it.
+      if (IntegerRange(type).second < std::numeric_limits<double>::infinity()) {
+        instance.seekg(at);
+        std::string token;
+        instance >> token;
+        const size_t first_digit = token.find_first_not_of("+-");
+        UNSEEN_CHECK(first_digit != std::string::npos &&
+                         token.find_first_not_of("0123456789", first_digit) == std::string::npos,
+                     "{}: PLY value '{}' of integer type {} is not an integer", path,
+                     token.substr(0, 40), type);
+      }
       // assimp converts integers with wrap-around: a count or index beyond its type's range
       // becomes an arbitrary (e.g. gigabyte) size.
       const auto [lo, hi] = IntegerRange(type);

@@ -243,5 +243,32 @@ TEST_F(MeshIoTest, ColladaDataArrayWithoutValuesIsAnError) {
   ExpectThrowsMentioning([&] { LoadMesh(huge_stride); }, {huge_stride, "stride"});
 }
 
+TEST_F(MeshIoTest, ColladaPolylistWithoutPolygonSizesIsAnError) {
+  // A quad as a <polylist>; without its <vcount> assimp dereferences a null pointer.
+  const std::string quad = R"(<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <library_geometries><geometry id="quad"><mesh>
+    <source id="pos"><float_array id="pos-array" count="12">0 0 0 1 0 0 1 1 0 0 1 0</float_array>
+      <technique_common><accessor source="#pos-array" count="4" stride="3">
+        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+      </accessor></technique_common></source>
+    <vertices id="vtx"><input semantic="POSITION" source="#pos"/></vertices>
+    <polylist count="1"><input semantic="VERTEX" source="#vtx" offset="0"/>
+      SIZES<p>0 1 2 3</p></polylist>
+  </mesh></geometry></library_geometries>
+  <library_visual_scenes><visual_scene id="scene"><node id="n">
+    <instance_geometry url="#quad"/></node></visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#scene"/></scene>
+</COLLADA>
+)";
+  std::string with = quad;
+  with.replace(with.find("SIZES"), 5, "<vcount>4</vcount>");
+  EXPECT_EQ(LoadMesh(Write("quad.dae", with)).num_triangles(), 2);
+  std::string without = quad;
+  without.replace(without.find("SIZES"), 5, "");
+  const std::string path = Write("no_vcount.dae", without);
+  ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "<vcount>"});
+}
+
 }  // namespace
 }  // namespace unseen

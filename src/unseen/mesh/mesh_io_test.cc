@@ -448,6 +448,20 @@ TEST_F(MeshIoTest, AsciiPlyCoordinateBeyond64BitsIsAnError) {
   EXPECT_EQ(LoadMesh(exponent).num_triangles(), 1);
 }
 
+TEST_F(MeshIoTest, AsciiPlyIntegerPropertyWithAFractionIsAnError) {
+  // assimp reads an integer property's digits up to the '.': "8446744070739.1e-320616" (0 as
+  // a number) was a list of 8e12 entries to it.
+  const std::string header = std::string(kPlyHeader3) +
+                             "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string fraction =
+      Write("fraction.ply", header + "0 0 0\n1 0 0\n0 1 0\n8446744070739.1e-320616 0 1 2\n");
+  ExpectThrowsMentioning([&] { LoadMesh(fraction); }, {fraction, "not an integer"});
+  const std::string index = Write("index.ply", header + "0 0 0\n1 0 0\n0 1 0\n3 0 1.5 2\n");
+  ExpectThrowsMentioning([&] { LoadMesh(index); }, {index, "1.5"});
+  const std::string plain = Write("plain.ply", header + "0 0 0\n1 0 0\n0 1 0\n3 0 +1 2\n");
+  EXPECT_EQ(LoadMesh(plain).num_triangles(), 1);
+}
+
 TEST_F(MeshIoTest, PlyHeaderLineWithAVerticalTabIsAnError) {
   // assimp splits words at spaces and tabs only: "vertex_indices\v" was another name to it,
   // a face element without indices, and a null dereference.
