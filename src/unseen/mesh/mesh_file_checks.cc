@@ -572,6 +572,13 @@ std::optional<PlyFaceTexcoords> ReadPlyBody(const std::string& path) {
     std::string text;
     UNSEEN_CHECK(std::getline(in, text), "{}: PLY body ends early, at {} {}", path, e.name, i);
     if (!text.empty() && text.back() == '\r') text.pop_back();
+    // A control character (a NUL above all) ends or splits assimp's reading of the line
+    // differently from this one: its lists then take their counts from other values.
+    const auto control = std::find_if(text.begin(), text.end(), [](char c) {
+      return static_cast<unsigned char>(c) < 0x20 && c != '\t';
+    });
+    UNSEEN_CHECK(control == text.end(), "{}: PLY {} {} holds a control character (code {})", path,
+                 e.name, i, control == text.end() ? 0 : int(static_cast<unsigned char>(*control)));
     instance.clear();
     instance.str(text);
   };

@@ -462,6 +462,20 @@ TEST_F(MeshIoTest, AsciiPlyIntegerPropertyWithAFractionIsAnError) {
   EXPECT_EQ(LoadMesh(plain).num_triangles(), 1);
 }
 
+TEST_F(MeshIoTest, AsciiPlyBodyWithAControlCharacterIsAnError) {
+  // A NUL ended assimp's reading of the line where this one went on: its lists took their
+  // counts from other values (an 8 GB allocation).
+  const std::string header = std::string(kPlyHeader3) +
+                             "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  std::string body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2 ";
+  body += '\0';
+  body += "4\n";
+  const std::string path = Write("nul.ply", header + body);
+  ExpectThrowsMentioning([&] { LoadMesh(path); }, {path, "control character"});
+  const std::string tabs = Write("tabs.ply", header + "0\t0\t0\n1 0 0\n0 1 0\r\n3 0 1 2\n");
+  EXPECT_EQ(LoadMesh(tabs).num_triangles(), 1);
+}
+
 TEST_F(MeshIoTest, PlyHeaderLineWithAVerticalTabIsAnError) {
   // assimp splits words at spaces and tabs only: "vertex_indices\v" was another name to it,
   // a face element without indices, and a null dereference.
