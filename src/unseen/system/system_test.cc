@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "unseen/mesh/primitives.h"
+#include "unseen/model/test_rig_scene.h"
 #include "unseen/render/rasterizer.h"
 #include "unseen/system/system_overlay.h"
 #include "unseen/track/test_scene.h"
@@ -129,13 +130,8 @@ TEST(System, RejectsWrongInput) {
 // few of its blocks move. Its first model covers the cube's silhouette when it is built
 // from the whole selected region, a fragment of it when only from the moving blocks.
 TEST(System, AnUnknownObjectsFirstModelCoversItWithImageDepth) {
-  const PinholeCamera cam = PinholeCamera::Centered(320, 240, 400.0);
-  Rig rig;
-  rig.cameras.push_back({"left", cam, Rigid3d()});
-  rig.cameras.push_back(
-      {"right", cam, Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.08, 0.0, 0.0))});
-  rig.cameras.push_back(
-      {"top", cam, Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(-0.06, -0.05, 0.0))});
+  const Rig rig = testing::MakeRigScene().rig;  // left, right 80 mm to its right, top
+  const PinholeCamera& cam = rig.cameras[0].intrinsics;
   const Mesh cube = MakeLetteredCube(0.1, 128);
   const Mesh wall = MakeTexturedBox(Eigen::Vector3d(1.6, 1.2, 0.02));
   const Rigid3d world_from_wall(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, 0, 1.0));
