@@ -290,6 +290,19 @@ std::pair<double, double> IntegerRange(const std::string& type) {
 }
 
 
+// Calls fn(body) for each element of `text` opened by `open` ("<p", "<polylist") and not
+// self-closing, `body` the offset just after its opening tag's '>'.
+template <typename Fn>
+void ForEachElementBody(const std::string& text, std::string_view open, Fn&& fn) {
+  for (size_t at = text.find(open); at != std::string::npos; at = text.find(open, at + 1)) {
+    const size_t name_end = at + open.size();
+    if (name_end >= text.size() || (text[name_end] != '>' && !IsBlank(text[name_end]))) continue;
+    const size_t open_end = text.find('>', name_end);
+    if (open_end == std::string::npos || text[open_end - 1] == '/') continue;
+    fn(open_end + 1);
+  }
+}
+
 }  // namespace
 
 // Collada: a <p> index list holding anything but integers and blanks makes assimp loop for
@@ -325,17 +338,12 @@ void CheckColladaText(const std::string& path) {
     }
   }
   // A <polylist> without its polygon sizes makes assimp dereference a null pointer.
-  for (size_t at = text.find("<polylist"); at != std::string::npos;
-       at = text.find("<polylist", at + 1)) {
-    const size_t name_end = at + 9;
-    if (name_end >= text.size() || (text[name_end] != '>' && !IsBlank(text[name_end]))) continue;
-    const size_t open_end = text.find('>', name_end);
-    if (open_end == std::string::npos || text[open_end - 1] == '/') continue;
-    const size_t end = std::min(text.find("</polylist", open_end), text.size());
-    const size_t sizes = text.find("<vcount>", open_end);
+  ForEachElementBody(text, "<polylist", [&](size_t body) {
+    const size_t end = std::min(text.find("</polylist", body), text.size());
+    const size_t sizes = text.find("<vcount>", body);
     UNSEEN_CHECK(sizes != std::string::npos && sizes < end,
                  "{}: <polylist> without a <vcount> element (its polygon sizes)", path);
-  }
+  });
   // Polygon sizes: assimp reserves what they say.
   for (size_t at = text.find("<vcount>"); at != std::string::npos;
        at = text.find("<vcount>", at + 1)) {
@@ -348,18 +356,14 @@ void CheckColladaText(const std::string& path) {
                    path, size.substr(0, 20), text.size());
     }
   }
-  for (size_t at = text.find("<p"); at != std::string::npos; at = text.find("<p", at + 1)) {
-    const size_t name_end = at + 2;
-    if (name_end >= text.size() || (text[name_end] != '>' && !IsBlank(text[name_end]))) continue;
-    const size_t open_end = text.find('>', name_end);
-    if (open_end == std::string::npos || text[open_end - 1] == '/') continue;
-    const size_t end = std::min(text.find('<', open_end), text.size());
-    const std::string list = text.substr(open_end + 1, end - open_end - 1);
+  ForEachElementBody(text, "<p", [&](size_t body) {
+    const size_t end = std::min(text.find('<', body), text.size());
+    const std::string list = text.substr(body, end - body);
     const size_t bad = list.find_first_not_of("0123456789+- \t\r\n");
     UNSEEN_CHECK(bad == std::string::npos,
                  "{}: <p> index list holds '{}', expected integers separated by blanks", path,
                  list.substr(bad, 20));
-  }
+  });
 }
 
 // glTF: assimp parses the JSON recursively, so that deeply nested input exhausts the

@@ -18,10 +18,12 @@ Modeller::Modeller(const Rig& rig, int reference, const ModellerOptions& options
   UNSEEN_CHECK(reference_ >= 0 && reference_ < rig_.size(),
                "Modeller: reference camera {} not in a rig of {} cameras", reference_, rig_.size());
   source_ = MakeDepthSource(rig_, reference_, options_.depth);
-  DepthExtractionOptions whole_range = options_.depth;
-  whole_range.plane_sweep.planes =
-      std::max(whole_range.plane_sweep.planes, options_.initial_pose_planes);
-  initial_pose_source_ = MakeDepthSource(rig_, reference_, whole_range);
+  if (options_.depth.source == DepthSourceKind::kPlaneSweep &&
+      options_.initial_pose_planes > options_.depth.plane_sweep.planes) {
+    DepthExtractionOptions whole_range = options_.depth;
+    whole_range.plane_sweep.planes = options_.initial_pose_planes;
+    initial_pose_source_ = MakeDepthSource(rig_, reference_, whole_range);
+  }
   if (options_.mesh.max_radius_m <= 0.0) {
     options_.mesh.max_radius_m = options_.segmentation.max_radius_m;
   }
@@ -124,7 +126,7 @@ std::optional<Rigid3d> Modeller::InitialPose(const Frame& frame, const PixelRect
   const PinholeCamera& camera = ref.intrinsics;
   const PixelRect r = region.Intersect(camera.ImageRect());
   if (r.empty()) return std::nullopt;
-  const DepthMap map = initial_pose_source_->Extract(frame, r);
+  const DepthMap map = (initial_pose_source_ ? *initial_pose_source_ : *source_).Extract(frame, r);
   std::vector<float> depths;
   for (int y = r.y0; y < r.y1; ++y) {
     for (int x = r.x0; x < r.x1; ++x) {

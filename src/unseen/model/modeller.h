@@ -106,7 +106,8 @@ class Modeller {
   int reference_;
   ModellerOptions options_;
   std::unique_ptr<DepthSource> source_;
-  std::unique_ptr<DepthSource> initial_pose_source_;  // the whole range (InitialPose)
+  // InitialPose's whole-range sweep, when it needs more planes than source_; else null.
+  std::unique_ptr<DepthSource> initial_pose_source_;
 };
 
 }  // namespace unseen

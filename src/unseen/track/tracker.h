@@ -293,6 +293,9 @@ class Tracker {
   // frame (its share fell below refresh_share_ratio of its best): the frame is aligned
   // again with the last tracked frame's colours, which become the held ones.
   bool HeldAppearanceFaded(const TrackResult& r) const;
+  // A photometric share below LiveAppearanceOptions::refresh_share_ratio of the held
+  // texture's best.
+  bool BelowHeldShare(double share) const;
   // The model has no colours of its own, and the silhouette could judge colours taken from
   // the frames (LiveAppearanceOptions).
   bool MayTakeLiveAppearance() const;

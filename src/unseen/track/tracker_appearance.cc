@@ -59,9 +59,13 @@ bool Tracker::MayTakeLiveAppearance() const {
          !given_model_->HasAppearance();
 }
 
+bool Tracker::BelowHeldShare(double share) const {
+  return share < options_.live_appearance.refresh_share_ratio * best_live_share_;
+}
+
 bool Tracker::HeldAppearanceFaded(const TrackResult& r) const {
   return live_appearance_ && model_ != given_model_ && latest_live_ && latest_live_ != model_ &&
-         (r.summary.share < options_.live_appearance.refresh_share_ratio * best_live_share_ ||
+         (BelowHeldShare(r.summary.share) ||
           r.confidence < options_.reacquisition.doubtful_confidence);
 }
 
@@ -77,7 +81,7 @@ void Tracker::UpdateLiveAppearance(const Frame& frame, const TrackResult& r) {
   // A texture held over frames: the latest one is kept aside for a frame it no longer fits.
   best_live_share_ = std::max(best_live_share_, r.summary.share);
   latest_live_ = CaptureLiveAppearance(frame, r.world_from_obj);
-  const bool faded = r.summary.share < lo.refresh_share_ratio * best_live_share_;
+  const bool faded = BelowHeldShare(r.summary.share);
   if ((++frames_since_capture_ >= lo.refresh_frames || faded) && latest_live_) {
     AdoptLiveAppearance(latest_live_);
   }

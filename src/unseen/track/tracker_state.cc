@@ -69,6 +69,12 @@ TrackResult Tracker::Track(const Frame& input_frame) {
 
   const bool search = status_ == TrackStatus::kLost && f.search_when_lost;
   TrackResult r;
+  // The frame aligned again from the prediction (the appearance changed); both paid for.
+  auto align_again = [&] {
+    const StageTimes first_times = r.summary.times;
+    r = AlignPredicted(frame, predicted);
+    r.summary.times += first_times;
+  };
   if (search) {
     // Re-acquisition (3.9): the coasted pose, correlation seeds, translations and rotations
     // around the last good pose, scored at the coarse levels, the best refined.
@@ -84,9 +90,7 @@ TrackResult Tracker::Track(const Frame& input_frame) {
                     frame.frame_id, PhotometricFit(r.summary),
                     r.summary.counts.RejectionGathering());
     photometric_demoted_ = true;
-    const StageTimes first_times = r.summary.times;
-    r = AlignPredicted(frame, predicted);
-    r.summary.times += first_times;
+    align_again();
   }
   if (!search && HeldAppearanceFaded(r)) {
     // The held texture no longer fits (the view or the light moved on): the last tracked
@@ -95,9 +99,7 @@ TrackResult Tracker::Track(const Frame& input_frame) {
                      "aligned again with the last frame's",
                      frame.frame_id, r.summary.share, best_live_share_);
     AdoptLiveAppearance(latest_live_);
-    const StageTimes first_times = r.summary.times;
-    r = AlignPredicted(frame, predicted);
-    r.summary.times += first_times;
+    align_again();
   }
   const bool first_frame = learn_from_start_;
   learn_from_start_ = false;
