@@ -7,6 +7,7 @@
 
 #include "unseen/image/image_io.h"
 #include "unseen/util/error.h"
+#include "unseen/util/logging.h"
 #include "unseen/util/timer.h"
 
 namespace unseen {
@@ -99,6 +100,14 @@ ModelBuild Modeller::Build(const Frame& frame, const Rigid3d& world_from_obj,
   }
   out.mask = SegmentObject(out.depth, camera, out.region, origin, mask, options_.segmentation,
                            &out.segmentation);
+  {
+    const SegmentationReport& sr = out.segmentation;
+    UNSEEN_LOG_DEBUG(
+        "modeller: segmentation of {} region pixels: {} with depth, {} on the support plane "
+        "(found {}), {} beyond the radius, {} unconnected; {} on the object",
+        sr.region_pixels, sr.with_depth, sr.on_plane, sr.plane_found, sr.beyond_radius,
+        sr.unconnected, cv::countNonZero(out.mask));
+  }
   const cv::Mat image = frame.images[reference_].type() == CV_32FC3
                             ? frame.images[reference_]
                             : ToFloatBgr(frame.images[reference_], "reference image");

@@ -100,6 +100,8 @@ void SegmentationOptions::Check() const {
                "segmentation.sparse_fill_px {} must be in [0, 64]", sparse_fill_px);
   UNSEEN_CHECK(dense_share >= 0.0 && dense_share <= 1.0,
                "segmentation.dense_share {} must be in [0, 1]", dense_share);
+  UNSEEN_CHECK(min_component_share >= 0.0 && min_component_share <= 1.0,
+               "segmentation.min_component_share {} must be in [0, 1]", min_component_share);
 }
 
 void SurfaceMeshOptions::Check() const {
@@ -229,6 +231,7 @@ ModellerOptions FromYaml(const YAML::Node& root, const std::string& what, Modell
         {"min_plane_share", YamlField(&sg.min_plane_share)},
         {"max_depth_step", YamlField(&sg.max_depth_step)},
         {"dense_share", YamlField(&sg.dense_share)},
+        {"min_component_share", YamlField(&sg.min_component_share)},
         {"sparse_gap_px", YamlField(&sg.sparse_gap_px)},
         {"sparse_fill_px", YamlField(&sg.sparse_fill_px)}}},
       {"mesh",

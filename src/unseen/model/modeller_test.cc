@@ -255,6 +255,48 @@ TEST_F(ModellerScene, SegmentationSeparatesTheObjectFromTheWallBehindIt) {
   EXPECT_GT(Iou(mask, s.object_masks[0]), 0.9);
 }
 
+TEST_F(ModellerScene, SegmentationIgnoresASensorsIslandNearerTheOriginThanTheFace) {
+  const RigScene& s = *scene_;
+  DepthMap map;
+  map.depth = s.frame.depths[0].clone();
+  map.dense = true;
+  const PinholeCamera& camera = s.rig.cameras[0].intrinsics;
+  const Eigen::Vector3d origin =
+      (s.rig.cameras[0].cam_from_world() * s.world_from_obj).translation();
+  // Amid the object's face, a two-pixel island measured at the object's centre, centimetres
+  // behind the face (a thin part seen through a gap, or a sensor's stray measurement): not
+  // connected to the face in depth, and nearer the origin than any of the face's points.
+  const cv::Rect box = cv::boundingRect(s.object_masks[0]);
+  const Eigen::Vector2d island_px(box.x + box.width / 2, box.y + box.height / 2);
+  const Eigen::Vector3d ray = camera.Unproject(island_px, 1.0);
+  const double z = origin.dot(ray) / ray.squaredNorm();  // the ray's point nearest the origin
+  ASSERT_LT((z * ray - origin).norm(), 0.01);
+  map.depth.at<float>(int(island_px.y()), int(island_px.x())) = static_cast<float>(z);
+  map.depth.at<float>(int(island_px.y()), int(island_px.x()) + 1) = static_cast<float>(z);
+  SegmentationOptions options;
+  options.remove_support_plane = false;
+  const double face_m = [&] {
+    double d = 1e9;
+    for (int y = 0; y < camera.height; ++y) {
+      for (int x = 0; x < camera.width; ++x) {
+        if (!s.object_masks[0].at<uint8_t>(y, x)) continue;
+        const Eigen::Vector3d p =
+            camera.Unproject(Eigen::Vector2d(x, y), s.frame.depths[0].at<float>(y, x));
+        d = std::min(d, (p - origin).norm());
+      }
+    }
+    return d;
+  }();
+  ASSERT_GT(face_m, 0.02) << "the island must be nearer the origin than the face";
+  const PixelRect region = ObjectRegion(40);
+  EXPECT_GT(Iou(SegmentObject(map, camera, region, origin, cv::Mat(), options), s.object_masks[0]),
+            0.9);
+  // Taken as a seed however small, the island alone would be the object.
+  options.min_component_share = 0.0;
+  EXPECT_LT(Iou(SegmentObject(map, camera, region, origin, cv::Mat(), options), s.object_masks[0]),
+            0.1);
+}
+
 TEST_F(ModellerScene, SparseDepthKeepsTheObjectAndDropsWrongMatchesAtItsDepth) {
   const RigScene& s = *scene_;
   const PinholeCamera& camera = s.rig.cameras[0].intrinsics;

@@ -133,6 +133,68 @@ std::optional<Plane> SupportPlane(const std::vector<Surfel>& points,
   return std::nullopt;
 }
 
+// Connected components of the measured pixels of `pixels` (region `r`'s measured pixels
+// that `out` keeps, row by row, x ascending): two are connected when they lie within `gap`
+// pixels of each other in x and y and their depths differ by less than `max_step` times
+// the depth. Labels from 1 over the region (0: none); per label its pixel count and the
+// distance of its nearest point from `origin` (m); index 0 unused.
+struct DepthComponents {
+  cv::Mat labels;  // CV_32SC1 of the region's size
+  std::vector<int> count{0};
+  std::vector<double> nearest_m{std::numeric_limits<double>::infinity()};
+};
+
+DepthComponents LabelDepthComponents(const DepthMap& depth_map, const PinholeCamera& camera,
+                                     const PixelRect& r, const cv::Mat& out,
+                                     const std::vector<cv::Point>& pixels,
+                                     const Eigen::Vector3d& origin, int gap, double max_step) {
+  DepthComponents parts;
+  parts.labels = cv::Mat(r.height(), r.width(), CV_32SC1, cv::Scalar(0));
+  cv::Mat& labels = parts.labels;
+  // A window visits the measured pixels of its rows (row_begin[y - r.y0] is the first of
+  // row y) instead of every pixel: image-based depth is sparse.
+  std::vector<int> row_begin(r.height() + 1, 0);
+  for (const cv::Point& px : pixels) ++row_begin[px.y - r.y0 + 1];
+  for (int k = 0; k < r.height(); ++k) row_begin[k + 1] += row_begin[k];
+  auto x_less = [](const cv::Point& a, int x) { return a.x < x; };
+  const cv::Point tl(r.x0, r.y0);
+  std::vector<cv::Point> stack;
+  for (const cv::Point& start : pixels) {
+    if (!out.at<uint8_t>(start) || labels.at<int>(start - tl) != 0) continue;
+    const int label = static_cast<int>(parts.count.size());
+    stack.assign(1, start);
+    labels.at<int>(start - tl) = label;
+    int count = 0;
+    double nearest = std::numeric_limits<double>::infinity();
+    while (!stack.empty()) {
+      const cv::Point p = stack.back();
+      stack.pop_back();
+      ++count;
+      const float z = depth_map.depth.at<float>(p);
+      nearest = std::min(nearest, (camera.Unproject(Eigen::Vector2d(p.x, p.y), z) - origin).norm());
+      const float step = static_cast<float>(max_step) * z;
+      const int x_begin = p.x - gap, x_end = p.x + gap;
+      for (int y = std::max(p.y - gap, r.y0); y <= std::min(p.y + gap, r.y1 - 1); ++y) {
+        const float* depth_row = depth_map.depth.ptr<float>(y);
+        const uint8_t* out_row = out.ptr<uint8_t>(y);
+        int* label_row = labels.ptr<int>(y - r.y0) - r.x0;  // indexed by image x
+        const auto row_end = pixels.begin() + row_begin[y - r.y0 + 1];
+        for (auto q =
+                 std::lower_bound(pixels.begin() + row_begin[y - r.y0], row_end, x_begin, x_less);
+             q != row_end && q->x <= x_end; ++q) {
+          const int x = q->x;
+          if (std::abs(depth_row[x] - z) > step || label_row[x] != 0 || !out_row[x]) continue;
+          label_row[x] = label;
+          stack.emplace_back(x, y);
+        }
+      }
+    }
+    parts.count.push_back(count);
+    parts.nearest_m.push_back(nearest);
+  }
+  return parts;
+}
+
 }  // namespace
 
 cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
@@ -232,86 +294,48 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
   }
   if (cv::countNonZero(out_region) == 0) return out;
 
-  // Dense depth: connected in depth to the measured pixel nearest the origin.
-  int seed = -1;
-  double seed_d = std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i < points.size(); ++i) {
-    if (!out.at<uint8_t>(pixels[i])) continue;
-    const double d = (points[i] - origin_in_cam).norm();
-    if (d < seed_d) {
-      seed_d = d;
-      seed = static_cast<int>(i);
-    }
-  }
-  if (seed < 0) return out;
   const int before = cv::countNonZero(out_region & (depth_region > 0.0f));
+  // The measured pixels connected in depth: neighbours (dense depth: the 8 around a pixel;
+  // sparse depth, which image-based sources measure on textured pixels only: any within
+  // sparse_gap_px) whose depths differ by less than max_depth_step of the depth.
+  const DepthComponents parts = LabelDepthComponents(
+      depth_map, camera, r, out, pixels, origin_in_cam, rep.dense ? 1 : options.sparse_gap_px,
+      options.max_depth_step);
+  if (parts.count.size() == 1) return out;  // no measured pixel left
+  int best_label = 0;
   if (rep.dense) {
-    // Over the region only (out is empty beyond it, and the mask stops the fill there).
-    const cv::Rect inner(1, 1, rect.width, rect.height);
-    cv::Mat flood(rect.height + 2, rect.width + 2, CV_8UC1, cv::Scalar(1));
-    flood(inner).setTo(0, out_region);
-    const float step = static_cast<float>(options.max_depth_step * points[seed].z());
-    cv::Mat depth = depth_region.clone();
-    cv::floodFill(depth, flood, pixels[seed] - rect.tl(), cv::Scalar(0), nullptr, cv::Scalar(step),
-                  cv::Scalar(step), 8 | cv::FLOODFILL_MASK_ONLY | (255 << 8));
-    out_region &= flood(inner) == 255;
-    rep.unconnected = before - cv::countNonZero(out_region);
+    // Dense depth: the component nearest the origin, among those that hold at least
+    // min_component_share of the measured pixels within the radius: a sensor's noise,
+    // holes and lost pixels along depth steps leave fragments (a thin part, a pixel
+    // island) that may come nearer the origin, inside the object, than its visible face.
+    // Without such a component, the nearest of all.
+    const int within = static_cast<int>(points.size()) - rep.beyond_radius;
+    const double min_count = options.min_component_share * within;
+    double best_d = std::numeric_limits<double>::infinity(), any_d = best_d;
+    int any_label = 0;
+    for (size_t k = 1; k < parts.count.size(); ++k) {
+      const double d = parts.nearest_m[k];
+      if (d < any_d) any_d = d, any_label = static_cast<int>(k);
+      if (parts.count[k] >= min_count && d < best_d) best_d = d, best_label = static_cast<int>(k);
+    }
+    if (best_label == 0) best_label = any_label;
+    if (best_label == 0) return out;
+    out_region &= parts.labels == best_label;
+    rep.unconnected = before - parts.count[best_label];
     return out;
   }
-  // Sparse depth (the image-based sources measure textured pixels only): the measured
-  // pixels connected across gaps of up to sparse_gap_px with depth steps below
-  // max_depth_step; of those components the largest that comes within half the radius of
-  // the origin is the object's, and the pixels within sparse_fill_px of it its area. Wrong
+  // Sparse depth: of the components the largest that comes within half the radius of the
+  // origin is the object's, and the pixels within sparse_fill_px of it its area. Wrong
   // matches on the background (a periodic pattern matches at many depths, some near the
   // origin's) form small components of their own.
-  cv::Mat labels(rect.size(), CV_32SC1, cv::Scalar(0));  // over the region, from rect.tl()
-  const int gap = options.sparse_gap_px;
-  int best_label = 0, best_count = 0;
-  int next_label = 0;
-  // `pixels` holds the measured pixels of the region row by row, x ascending (the only
-  // ones the scan below can take): row_begin[y - r.y0] is the first of row y. A window
-  // visits those of its rows instead of every pixel (the depth is sparse), in the same order.
-  std::vector<int> row_begin(r.height() + 1, 0);
-  for (const cv::Point& px : pixels) ++row_begin[px.y - r.y0 + 1];
-  for (int k = 0; k < r.height(); ++k) row_begin[k + 1] += row_begin[k];
-  auto x_less = [](const cv::Point& a, int x) { return a.x < x; };
-  for (size_t i = 0; i < points.size(); ++i) {
-    if (!out.at<uint8_t>(pixels[i]) || labels.at<int>(pixels[i] - rect.tl()) != 0) continue;
-    const int label = ++next_label;
-    std::vector<cv::Point> stack{pixels[i]};
-    labels.at<int>(pixels[i] - rect.tl()) = label;
-    int count = 0;
-    bool near_origin = false;
-    while (!stack.empty()) {
-      const cv::Point p = stack.back();
-      stack.pop_back();
-      ++count;
-      const float z = depth_map.depth.at<float>(p);
-      near_origin =
-          near_origin || (camera.Unproject(Eigen::Vector2d(p.x, p.y), z) - origin_in_cam).norm() <
-                             0.5 * options.max_radius_m;
-      const float step = static_cast<float>(options.max_depth_step) * z;
-      const int x_begin = p.x - gap, x_end = p.x + gap;
-      for (int y = std::max(p.y - gap, r.y0); y <= std::min(p.y + gap, r.y1 - 1); ++y) {
-        const float* depth_row = depth_map.depth.ptr<float>(y);
-        const uint8_t* out_row = out.ptr<uint8_t>(y);
-        int* label_row = labels.ptr<int>(y - r.y0) - r.x0;  // indexed by image x
-        const auto row_end = pixels.begin() + row_begin[y - r.y0 + 1];
-        for (auto q =
-                 std::lower_bound(pixels.begin() + row_begin[y - r.y0], row_end, x_begin, x_less);
-             q != row_end && q->x <= x_end; ++q) {
-          const int x = q->x;
-          if (std::abs(depth_row[x] - z) > step || label_row[x] != 0 || !out_row[x]) continue;
-          label_row[x] = label;
-          stack.emplace_back(x, y);
-        }
-      }
-    }
-    if (near_origin && count > best_count) {
-      best_count = count;
-      best_label = label;
+  int best_count = 0;
+  for (size_t k = 1; k < parts.count.size(); ++k) {
+    if (parts.nearest_m[k] < 0.5 * options.max_radius_m && parts.count[k] > best_count) {
+      best_count = parts.count[k];
+      best_label = static_cast<int>(k);
     }
   }
+  const cv::Mat& labels = parts.labels;
   const cv::Mat component = (labels == best_label) & (depth_region > 0.0f);
   const int reached = best_label > 0 ? best_count : 0;
   rep.unconnected = before - reached;

@@ -7,7 +7,8 @@
 // narrows it to the object: within max_radius_m of the object's origin (a position
 // interest filter), off the dominant plane that reaches the region's rim (the table or
 // floor the object stands on), and connected in depth to the surface nearest the origin
-// (not a neighbouring object, not a wrong match on the background); where the depth is
+// (not a neighbouring object, not a wrong match on the background, not a sensor's island
+// of a few pixels); where the depth is
 // sparse (image-based sources) across small gaps, the area around those pixels.
 #pragma once
 
@@ -31,6 +32,10 @@ struct SegmentationOptions {
   // at least dense_share of the region's pixels have depth.
   double max_depth_step = 0.03;
   double dense_share = 0.5;
+  // Dense depth: the object is the connected surface nearest the origin among those
+  // holding at least this share of the measured pixels within max_radius_m (a sensor's
+  // noise and lost pixels leave small islands, which may lie nearer the origin).
+  double min_component_share = 0.05;
   // Sparse depth: measured pixels connect across gaps of up to this many pixels, and the
   // object's area reaches this far around them.
   int sparse_gap_px = 8;
