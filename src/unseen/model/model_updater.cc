@@ -71,7 +71,8 @@ Mesh ModelUpdater::Start(const ModelBuild& first) {
 
 ModelBuild ModelUpdater::BuildAndFuse(const Frame& frame, const Rigid3d& world_from_obj,
                                       const Mesh& current, const cv::Mat& mask) {
-  ModelBuild build = modeller_.Build(frame, world_from_obj, PixelRect(), mask, &current);
+  ModelBuild build =
+      modeller_.Build(frame, world_from_obj, PixelRect(), mask, &current, MaskRole::kSelects);
   if (!build.ok() || !fusion_) return build;
   Timer timer;
   std::string why;

@@ -77,9 +77,9 @@ class ModelUpdater {
   // of this frame when one is due. A build that cannot model the frame is counted and
   // dropped (the model in use stays).
   // `current`: the model in use (ModellerOptions::align_to_current aligns the new surface
-  // to it). `mask` (optional, CV_8UC1 of the reference camera's size): where the object
-  // may be in this frame (e.g. the pixels moving with it, select/interest_filter.h's
-  // TrackedMotionFilter), handed to Modeller::Build.
+  // to it). `mask` (optional, CV_8UC1 of the reference camera's size): pixels of the
+  // object in this frame (those moving with it, select/interest_filter.h's
+  // TrackedMotionFilter), handed to Modeller::Build as MaskRole::kSelects.
   std::optional<Mesh> AfterFrame(const Frame& frame, const Rigid3d& world_from_obj,
                                  double confidence, const Mesh& current,
                                  const cv::Mat& mask = cv::Mat());

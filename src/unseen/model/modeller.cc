@@ -34,7 +34,7 @@ Modeller::Modeller(const Rig& rig, int reference, const ModellerOptions& options
 
 ModelBuild Modeller::Build(const Frame& frame, const Rigid3d& world_from_obj,
                            const PixelRect& region, const cv::Mat& mask,
-                           const Mesh* current) const {
+                           const Mesh* current, MaskRole mask_role) const {
   UNSEEN_CHECK(world_from_obj.IsValid(), "Modeller: object frame {} is not a valid pose",
                world_from_obj.ToString());
   const RigCamera& ref = rig_.cameras[reference_];
@@ -99,7 +99,7 @@ ModelBuild Modeller::Build(const Frame& frame, const Rigid3d& world_from_obj,
     return out;
   }
   out.mask = SegmentObject(out.depth, camera, out.region, origin, mask, options_.segmentation,
-                           &out.segmentation);
+                           &out.segmentation, mask_role);
   {
     const SegmentationReport& sr = out.segmentation;
     UNSEEN_LOG_DEBUG(
@@ -145,8 +145,12 @@ std::optional<Rigid3d> Modeller::InitialPose(const Frame& frame, const PixelRect
     }
   }
   if (depths.empty()) return std::nullopt;
-  std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
-  const double z = depths[depths.size() / 2] + options_.origin_offset_m;
+  const double quantile = options_.depth.source == DepthSourceKind::kSensor && !mask.empty()
+                              ? options_.sensor_mask_depth_quantile
+                              : 0.5;
+  const auto at = depths.begin() + static_cast<std::ptrdiff_t>(quantile * (depths.size() - 1));
+  std::nth_element(depths.begin(), at, depths.end());
+  const double z = *at + options_.origin_offset_m;
   const Eigen::Vector2d centre(0.5 * (r.x0 + r.x1 - 1), 0.5 * (r.y0 + r.y1 - 1));
   const Rigid3d cam_from_obj(Eigen::Quaterniond::Identity(), camera.Unproject(centre, z));
   return ref.world_from_cam * cam_from_obj;

@@ -31,6 +31,13 @@ struct ModellerOptions {
   // SPEC 4.4: the origin of a new object frame lies this far behind the visible surface at
   // the region's centre (inside the object).
   double origin_offset_m = 0.02;
+  // The visible surface there is the median of the depths measured in the region (inside
+  // its mask); with a depth sensor and a mask of the pixels that moved, this quantile of
+  // theirs: an object moving before a textured background moves the blocks along its
+  // outline on both sides, the background's may hold most of them, and the object is the
+  // nearer surface (held-out untextured teapot before a photo: the first model was the
+  // photo).
+  double sensor_mask_depth_quantile = 0.25;
   // The plane sweep that places a new object frame searches the whole depth range
   // (depth.min_depth_m to max_depth_m) with at least this many planes: at the object's
   // range's 64 over 0.1-5 m, neighbouring planes of a wide rig (cameras 35 deg apart) are
@@ -83,16 +90,18 @@ class Modeller {
   // The model of the object seen from the reference camera in the frame `world_from_obj`.
   // `region`: where the object is in the reference image; empty: the rectangle of the
   // sphere of segmentation.max_radius_m about the origin. `mask` (optional, CV_8UC1 of the
-  // reference camera's size): non-zero where the object may be.
+  // reference camera's size): non-zero where the object may be (kBounds) or on pixels of
+  // the object (kSelects: the pixels that moved with it; SegmentObject).
   // `current` (optional): the model in use, for a rebuild at the tracked `world_from_obj`;
   // with ModellerOptions::align_to_current the new surface is aligned to it first and the
   // model built in the corrected frame (ModelBuild::world_from_obj).
   ModelBuild Build(const Frame& frame, const Rigid3d& world_from_obj, const PixelRect& region,
-                   const cv::Mat& mask = cv::Mat(), const Mesh* current = nullptr) const;
+                   const cv::Mat& mask = cv::Mat(), const Mesh* current = nullptr,
+                   MaskRole mask_role = MaskRole::kBounds) const;
 
   // SPEC 4.4: the object frame for a region of the reference image: the centre of the
-  // region back-projected to the median depth measured in it (inside `mask` if given),
-  // origin_offset_m deeper; axes the reference camera's. std::nullopt when nothing in the
+  // region back-projected to the median depth measured in it (inside `mask` if given; a
+  // sensor's: sensor_mask_depth_quantile), origin_offset_m deeper; axes the reference camera's. std::nullopt when nothing in the
   // region has depth.
   std::optional<Rigid3d> InitialPose(const Frame& frame, const PixelRect& region,
                                      const cv::Mat& mask = cv::Mat()) const;

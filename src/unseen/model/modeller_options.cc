@@ -172,6 +172,8 @@ void ModellerOptions::Check() const {
   fusion.Check();
   UNSEEN_CHECK(origin_offset_m >= 0.0 && std::isfinite(origin_offset_m),
                "model.origin_offset_m {} must be >= 0", origin_offset_m);
+  UNSEEN_CHECK(sensor_mask_depth_quantile >= 0.0 && sensor_mask_depth_quantile <= 1.0,
+               "model.sensor_mask_depth_quantile {} must be in [0, 1]", sensor_mask_depth_quantile);
   UNSEEN_CHECK(initial_pose_planes >= 4 && initial_pose_planes <= 1024,
                "model.initial_pose_planes {} must be in [4, 1024]", initial_pose_planes);
 }
@@ -247,6 +249,7 @@ ModellerOptions FromYaml(const YAML::Node& root, const std::string& what, Modell
         {"min_depth_step_m", YamlField(&me.min_depth_step_m)}}},
       {"model",
        {{"origin_offset_m", YamlField(&o.origin_offset_m)},
+        {"sensor_mask_depth_quantile", YamlField(&o.sensor_mask_depth_quantile)},
         {"initial_pose_planes", YamlField(&o.initial_pose_planes)},
         {"align_to_current", YamlField(&o.align_to_current)}}},
       {"alignment",

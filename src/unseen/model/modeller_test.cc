@@ -297,6 +297,48 @@ TEST_F(ModellerScene, SegmentationIgnoresASensorsIslandNearerTheOriginThanTheFac
             0.1);
 }
 
+// The blocks that moved with an untextured object lie along its outline, inside and out:
+// with a depth sensor they pick the object's surface, which the depth then segments whole,
+// and place the object frame at the nearer of the two surfaces they hold.
+TEST_F(ModellerScene, PixelsThatMovedAlongTheOutlineSelectTheWholeSurface) {
+  const RigScene& s = *scene_;
+  const PinholeCamera& camera = s.rig.cameras[0].intrinsics;
+  const cv::Mat& object = s.object_masks[0];
+  cv::Mat outside, inside;
+  cv::dilate(object, outside, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(19, 19)));
+  cv::erode(object, inside, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(9, 9)));
+  const cv::Mat ring = outside & ~inside;
+  ASSERT_GT(cv::countNonZero(ring & ~object), cv::countNonZero(ring & object))
+      << "the ring must hold more of the wall than of the object";
+  const Eigen::Vector3d origin =
+      (s.rig.cameras[0].cam_from_world() * s.world_from_obj).translation();
+  ModellerOptions options;
+  options.depth.source = DepthSourceKind::kSensor;
+  const cv::Rect box = cv::boundingRect(ring);
+  const PixelRect ring_box{box.x, box.y, box.x + box.width, box.y + box.height};
+  auto start_depth = [&](double quantile) {
+    options.sensor_mask_depth_quantile = quantile;
+    const std::optional<Rigid3d> start = Modeller(s.rig, 0, options).InitialPose(s.frame, ring_box, ring);
+    return start ? (s.rig.cameras[0].cam_from_world() * *start).translation().z() : -1.0;
+  };
+  EXPECT_NEAR(start_depth(ModellerOptions().sensor_mask_depth_quantile), origin.z(), 0.05);
+  EXPECT_GT(start_depth(0.5), 0.9) << "the median lies on the wall 1 m away";
+
+  DepthMap map;
+  map.depth = s.frame.depths[0];
+  map.dense = true;
+  const std::optional<PixelRect> sphere = camera.SphereRect(origin, 0.15);
+  ASSERT_TRUE(sphere.has_value());
+  SegmentationOptions wide;  // a radius that takes in the wall behind the object
+  wide.max_radius_m = 0.6;
+  wide.remove_support_plane = false;
+  const cv::Mat selected =
+      SegmentObject(map, camera, *sphere, origin, ring, wide, nullptr, MaskRole::kSelects);
+  EXPECT_GT(Iou(selected, object), 0.9);
+  const cv::Mat bounded = SegmentObject(map, camera, *sphere, origin, ring, wide);
+  EXPECT_LT(Iou(bounded, object), 0.6);
+}
+
 TEST_F(ModellerScene, SparseDepthKeepsTheObjectAndDropsWrongMatchesAtItsDepth) {
   const RigScene& s = *scene_;
   const PinholeCamera& camera = s.rig.cameras[0].intrinsics;

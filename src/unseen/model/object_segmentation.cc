@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <opencv2/imgproc.hpp>
+#include <numeric>
 #include <optional>
 #include <random>
 #include <vector>
@@ -200,7 +201,7 @@ DepthComponents LabelDepthComponents(const DepthMap& depth_map, const PinholeCam
 cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
                       const PixelRect& region, const Eigen::Vector3d& origin_in_cam,
                       const cv::Mat& given_mask, const SegmentationOptions& options,
-                      SegmentationReport* report) {
+                      SegmentationReport* report, MaskRole mask_role) {
   options.Check();
   const cv::Size size(camera.width, camera.height);
   UNSEEN_CHECK(depth_map.depth.type() == CV_32FC1 && depth_map.depth.size() == size,
@@ -221,7 +222,10 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
   // From here on `out` is empty beyond `rect`: the whole-image steps below look at `rect`.
   cv::Mat out_region = out(rect);
   const cv::Mat depth_region = depth_map.depth(rect);
-  if (!given_mask.empty()) out_region.setTo(0, given_mask(rect) == 0);
+  // A selecting mask bounds the object but in a sensor's dense depth map.
+  const bool mask_selects =
+      !given_mask.empty() && mask_role == MaskRole::kSelects && depth_map.dense;
+  if (!given_mask.empty() && !mask_selects) out_region.setTo(0, given_mask(rect) == 0);
   rep.region_pixels = cv::countNonZero(out_region);
 
   // The measured points in the region and their distance from the origin.
@@ -304,21 +308,45 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
   if (parts.count.size() == 1) return out;  // no measured pixel left
   int best_label = 0;
   if (rep.dense) {
-    // Dense depth: the component nearest the origin, among those that hold at least
+    // Dense depth: with a selecting mask, a surface holding the mask's measured pixels
+    // (below). Else the component nearest the origin, among those that hold at least
     // min_component_share of the measured pixels within the radius: a sensor's noise,
     // holes and lost pixels along depth steps leave fragments (a thin part, a pixel
     // island) that may come nearer the origin, inside the object, than its visible face.
     // Without such a component, the nearest of all.
+    if (mask_selects) {
+      std::vector<int> masked(parts.count.size(), 0);
+      const cv::Mat mask_region = given_mask(rect);
+      for (int y = 0; y < rect.height; ++y) {
+        const int* label_row = parts.labels.ptr<int>(y);
+        const uint8_t* mask_row = mask_region.ptr<uint8_t>(y);
+        for (int x = 0; x < rect.width; ++x) {
+          if (label_row[x] > 0 && mask_row[x]) ++masked[label_row[x]];
+        }
+      }
+      // Of the surfaces holding min_component_share of them, the nearest the origin (the
+      // blocks along a moving object's outline hold the background's side too).
+      const int total = std::accumulate(masked.begin(), masked.end(), 0);
+      double best_d = std::numeric_limits<double>::infinity();
+      for (size_t k = 1; k < masked.size(); ++k) {
+        if (masked[k] == 0 || masked[k] < options.min_component_share * total) continue;
+        if (parts.nearest_m[k] < best_d) {
+          best_d = parts.nearest_m[k];
+          best_label = static_cast<int>(k);
+        }
+      }
+    }
     const int within = static_cast<int>(points.size()) - rep.beyond_radius;
     const double min_count = options.min_component_share * within;
-    double best_d = std::numeric_limits<double>::infinity(), any_d = best_d;
-    int any_label = 0;
+    double near_d = std::numeric_limits<double>::infinity(), any_d = near_d;
+    int near_label = 0, any_label = 0;
     for (size_t k = 1; k < parts.count.size(); ++k) {
       const double d = parts.nearest_m[k];
       if (d < any_d) any_d = d, any_label = static_cast<int>(k);
-      if (parts.count[k] >= min_count && d < best_d) best_d = d, best_label = static_cast<int>(k);
+      if (parts.count[k] >= min_count && d < near_d) near_d = d, near_label = static_cast<int>(k);
     }
-    if (best_label == 0) best_label = any_label;
+    // (Also when a selecting mask lies on no surface.)
+    if (best_label == 0) best_label = near_label > 0 ? near_label : any_label;
     if (best_label == 0) return out;
     out_region &= parts.labels == best_label;
     rep.unconnected = before - parts.count[best_label];

@@ -34,7 +34,8 @@ struct SegmentationOptions {
   double dense_share = 0.5;
   // Dense depth: the object is the connected surface nearest the origin among those
   // holding at least this share of the measured pixels within max_radius_m (a sensor's
-  // noise and lost pixels leave small islands, which may lie nearer the origin).
+  // noise and lost pixels leave small islands, which may lie nearer the origin), or of a
+  // selecting mask's (MaskRole::kSelects).
   double min_component_share = 0.05;
   // Sparse depth: measured pixels connect across gaps of up to this many pixels, and the
   // object's area reaches this far around them.
@@ -51,12 +52,25 @@ struct SegmentationReport {
   Eigen::Vector4d support_plane = Eigen::Vector4d::Zero();
 };
 
+// What a given mask says about the object's pixels.
+enum class MaskRole {
+  kBounds,   // the object lies within the mask (a user's mask, an interest map's part)
+  // The object holds some of the mask's pixels: with a dense depth map (DepthMap::dense, a
+  // sensor's), of the connected surfaces holding min_component_share of the mask's
+  // measured pixels the one nearest the origin is the object's, inside the mask or not
+  // (the blocks that moved: an untextured object moves in those along its outline only,
+  // and those hold the background's side too); else as kBounds.
+  kSelects,
+};
+
 // CV_8UC1 of the camera's size, 255 on the object's pixels. `origin_in_cam`: the object
 // frame's origin in the camera (inside or just behind the visible surface); `given_mask`
-// (empty: none) CV_8UC1, non-zero where the object may be. Deterministic (seeded RANSAC).
+// (empty: none) CV_8UC1, non-zero on object pixels as `mask_role` says. Deterministic
+// (seeded RANSAC).
 cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
                       const PixelRect& region, const Eigen::Vector3d& origin_in_cam,
                       const cv::Mat& given_mask, const SegmentationOptions& options,
-                      SegmentationReport* report = nullptr);
+                      SegmentationReport* report = nullptr,
+                      MaskRole mask_role = MaskRole::kBounds);
 
 }  // namespace unseen

@@ -93,7 +93,12 @@ bool System::Start(const Frame& frame, const RegionCandidate& region, const cv::
     step->note = "no depth measured in the region: cannot place the object";
     return false;
   }
-  const ModelBuild build = modeller_->Build(frame, *start, region.box, mask);
+  // Measured depth: the region's moving pixels pick the object's surface, which reaches as
+  // far as it is connected in depth within the object's sphere (an untextured object moves
+  // only in the blocks along its outline).
+  const ModelBuild build =
+      image_depth ? modeller_->Build(frame, *start, region.box, mask)
+                  : modeller_->Build(frame, *start, PixelRect(), mask, nullptr, MaskRole::kSelects);
   if (!build.ok()) {
     step->note = "cannot model the object: " + build.why;
     return false;
