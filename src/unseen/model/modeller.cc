@@ -130,7 +130,7 @@ ModelBuild Modeller::Build(const Frame& frame, const Rigid3d& world_from_obj,
 }
 
 std::optional<Rigid3d> Modeller::InitialPose(const Frame& frame, const PixelRect& region,
-                                             const cv::Mat& mask) const {
+                                             const cv::Mat& mask, MaskRole mask_role) const {
   const RigCamera& ref = rig_.cameras[reference_];
   const PinholeCamera& camera = ref.intrinsics;
   const PixelRect r = region.Intersect(camera.ImageRect());
@@ -145,7 +145,8 @@ std::optional<Rigid3d> Modeller::InitialPose(const Frame& frame, const PixelRect
     }
   }
   if (depths.empty()) return std::nullopt;
-  const double quantile = options_.depth.source == DepthSourceKind::kSensor && !mask.empty()
+  const double quantile = options_.depth.source == DepthSourceKind::kSensor && !mask.empty() &&
+                                  mask_role == MaskRole::kSelects
                               ? options_.sensor_mask_depth_quantile
                               : 0.5;
   const auto at = depths.begin() + static_cast<std::ptrdiff_t>(quantile * (depths.size() - 1));

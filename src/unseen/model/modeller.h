@@ -32,12 +32,12 @@ struct ModellerOptions {
   // the region's centre (inside the object).
   double origin_offset_m = 0.02;
   // The visible surface there is the median of the depths measured in the region (inside
-  // its mask); with a depth sensor and a mask of the pixels that moved, this quantile of
-  // theirs: an object moving before a textured background moves the blocks along its
-  // outline on both sides, the background's may hold most of them, and the object is the
-  // nearer surface (held-out untextured teapot before a photo: the first model was the
-  // photo).
-  double sensor_mask_depth_quantile = 0.25;
+  // its mask); with a depth sensor and a mask of the pixels that moved (MaskRole::
+  // kSelects), this quantile of theirs: an object moving before a textured background
+  // moves the blocks along its outline on both sides, the background's may hold most of
+  // them (held-out untextured teapot before a photo: 80 %; the first model was the
+  // photo's), and the object is the nearer surface.
+  double sensor_mask_depth_quantile = 0.1;
   // The plane sweep that places a new object frame searches the whole depth range
   // (depth.min_depth_m to max_depth_m) with at least this many planes: at the object's
   // range's 64 over 0.1-5 m, neighbouring planes of a wide rig (cameras 35 deg apart) are
@@ -101,10 +101,11 @@ class Modeller {
 
   // SPEC 4.4: the object frame for a region of the reference image: the centre of the
   // region back-projected to the median depth measured in it (inside `mask` if given; a
-  // sensor's: sensor_mask_depth_quantile), origin_offset_m deeper; axes the reference camera's. std::nullopt when nothing in the
+  // sensor's in a selecting mask: sensor_mask_depth_quantile), origin_offset_m deeper; axes the reference camera's. std::nullopt when nothing in the
   // region has depth.
   std::optional<Rigid3d> InitialPose(const Frame& frame, const PixelRect& region,
-                                     const cv::Mat& mask = cv::Mat()) const;
+                                     const cv::Mat& mask = cv::Mat(),
+                                     MaskRole mask_role = MaskRole::kBounds) const;
 
   const ModellerOptions& options() const { return options_; }
   int reference() const { return reference_; }

@@ -318,11 +318,16 @@ TEST_F(ModellerScene, PixelsThatMovedAlongTheOutlineSelectTheWholeSurface) {
   const PixelRect ring_box{box.x, box.y, box.x + box.width, box.y + box.height};
   auto start_depth = [&](double quantile) {
     options.sensor_mask_depth_quantile = quantile;
-    const std::optional<Rigid3d> start = Modeller(s.rig, 0, options).InitialPose(s.frame, ring_box, ring);
+    const std::optional<Rigid3d> start =
+        Modeller(s.rig, 0, options).InitialPose(s.frame, ring_box, ring, MaskRole::kSelects);
     return start ? (s.rig.cameras[0].cam_from_world() * *start).translation().z() : -1.0;
   };
   EXPECT_NEAR(start_depth(ModellerOptions().sensor_mask_depth_quantile), origin.z(), 0.05);
   EXPECT_GT(start_depth(0.5), 0.9) << "the median lies on the wall 1 m away";
+  const std::optional<Rigid3d> bounded_start =
+      Modeller(s.rig, 0, options).InitialPose(s.frame, ring_box, ring);  // kBounds: the median
+  ASSERT_TRUE(bounded_start.has_value());
+  EXPECT_GT((s.rig.cameras[0].cam_from_world() * *bounded_start).translation().z(), 0.9);
 
   DepthMap map;
   map.depth = s.frame.depths[0];

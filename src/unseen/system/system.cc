@@ -88,17 +88,18 @@ bool System::Start(const Frame& frame, const RegionCandidate& region, const cv::
       labels.empty() || (image_depth && !options_.first_model_from_motion_with_image_depth)
           ? cv::Mat()
           : cv::Mat(labels == region.label);
-  const std::optional<Rigid3d> start = modeller_->InitialPose(frame, region.box, mask);
+  // Measured depth and moving pixels: those pick the object's surface, which reaches as far
+  // as it is connected in depth within the object's sphere (an untextured object moves
+  // only in the blocks along its outline, and those hold the background's side too).
+  const bool moved = !image_depth && !mask.empty() && options_.regions == RegionSource::kMotion;
+  const MaskRole role = moved ? MaskRole::kSelects : MaskRole::kBounds;
+  const std::optional<Rigid3d> start = modeller_->InitialPose(frame, region.box, mask, role);
   if (!start) {
     step->note = "no depth measured in the region: cannot place the object";
     return false;
   }
-  // Measured depth: the region's moving pixels pick the object's surface, which reaches as
-  // far as it is connected in depth within the object's sphere (an untextured object moves
-  // only in the blocks along its outline).
   const ModelBuild build =
-      image_depth ? modeller_->Build(frame, *start, region.box, mask)
-                  : modeller_->Build(frame, *start, PixelRect(), mask, nullptr, MaskRole::kSelects);
+      modeller_->Build(frame, *start, moved ? PixelRect() : region.box, mask, nullptr, role);
   if (!build.ok()) {
     step->note = "cannot model the object: " + build.why;
     return false;
