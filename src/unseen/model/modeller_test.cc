@@ -368,6 +368,18 @@ TEST_F(ModellerScene, SparseDepthKeepsTheObjectAndDropsWrongMatchesAtItsDepth) {
   EXPECT_FALSE(report.dense);
   EXPECT_EQ(cv::countNonZero(mask(blob)), 0);
   EXPECT_GT(Iou(mask, s.object_masks[0]), 0.8);
+  // Pixels that moved along the object's left edge and over the blob: they select the
+  // object's component, whose area reaches beyond them; as a bound they leave a sliver.
+  cv::Mat moved = cv::Mat::zeros(mask.size(), CV_8UC1);
+  moved(cv::Rect(box.x - 4, box.y, 10, box.height)).setTo(255);
+  moved(blob).setTo(255);
+  const cv::Mat selected = SegmentObject(map, camera, ObjectRegion(50), origin, moved,
+                                         SegmentationOptions(), nullptr, MaskRole::kSelects);
+  EXPECT_EQ(cv::countNonZero(selected(blob)), 0);
+  EXPECT_GT(Iou(selected, s.object_masks[0]), 0.8);
+  EXPECT_LT(Iou(SegmentObject(map, camera, ObjectRegion(50), origin, moved, SegmentationOptions()),
+                s.object_masks[0]),
+            0.3);
 }
 
 TEST_F(ModellerScene, WhatCannotBeModelledIsAStatusNotAnEmptyModel) {

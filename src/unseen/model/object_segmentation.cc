@@ -222,9 +222,7 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
   // From here on `out` is empty beyond `rect`: the whole-image steps below look at `rect`.
   cv::Mat out_region = out(rect);
   const cv::Mat depth_region = depth_map.depth(rect);
-  // A selecting mask bounds the object but in a sensor's dense depth map.
-  const bool mask_selects =
-      !given_mask.empty() && mask_role == MaskRole::kSelects && depth_map.dense;
+  const bool mask_selects = !given_mask.empty() && mask_role == MaskRole::kSelects;
   if (!given_mask.empty() && !mask_selects) out_region.setTo(0, given_mask(rect) == 0);
   rep.region_pixels = cv::countNonZero(out_region);
 
@@ -307,6 +305,23 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
       options.max_depth_step);
   if (parts.count.size() == 1) return out;  // no measured pixel left
   int best_label = 0;
+  std::vector<int> masked(parts.count.size(), 0);
+  int total_masked = 0;
+  if (mask_selects) {
+    const cv::Mat mask_region = given_mask(rect);
+    for (int y = 0; y < rect.height; ++y) {
+      const int* label_row = parts.labels.ptr<int>(y);
+      const uint8_t* mask_row = mask_region.ptr<uint8_t>(y);
+      for (int x = 0; x < rect.width; ++x) {
+        if (label_row[x] > 0 && mask_row[x]) ++masked[label_row[x]];
+      }
+    }
+    total_masked = std::accumulate(masked.begin(), masked.end(), 0);
+  }
+  // Whether component k holds enough of a selecting mask's measured pixels to be the object.
+  auto selected = [&](size_t k) {
+    return masked[k] > 0 && masked[k] >= options.min_component_share * total_masked;
+  };
   if (rep.dense) {
     // Dense depth: with a selecting mask, a surface holding the mask's measured pixels
     // (below). Else the component nearest the origin, among those that hold at least
@@ -315,22 +330,11 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
     // island) that may come nearer the origin, inside the object, than its visible face.
     // Without such a component, the nearest of all.
     if (mask_selects) {
-      std::vector<int> masked(parts.count.size(), 0);
-      const cv::Mat mask_region = given_mask(rect);
-      for (int y = 0; y < rect.height; ++y) {
-        const int* label_row = parts.labels.ptr<int>(y);
-        const uint8_t* mask_row = mask_region.ptr<uint8_t>(y);
-        for (int x = 0; x < rect.width; ++x) {
-          if (label_row[x] > 0 && mask_row[x]) ++masked[label_row[x]];
-        }
-      }
-      // Of the surfaces holding min_component_share of them, the nearest the origin (the
-      // blocks along a moving object's outline hold the background's side too).
-      const int total = std::accumulate(masked.begin(), masked.end(), 0);
+      // Of the surfaces it selects, the nearest the origin (the blocks along a moving
+      // object's outline hold the background's side too).
       double best_d = std::numeric_limits<double>::infinity();
       for (size_t k = 1; k < masked.size(); ++k) {
-        if (masked[k] == 0 || masked[k] < options.min_component_share * total) continue;
-        if (parts.nearest_m[k] < best_d) {
+        if (selected(k) && parts.nearest_m[k] < best_d) {
           best_d = parts.nearest_m[k];
           best_label = static_cast<int>(k);
         }
@@ -352,13 +356,15 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
     rep.unconnected = before - parts.count[best_label];
     return out;
   }
-  // Sparse depth: of the components the largest that comes within half the radius of the
-  // origin is the object's, and the pixels within sparse_fill_px of it its area. Wrong
+  // Sparse depth: of the components (a selecting mask's only) the largest that comes within
+  // half the radius of the origin is the object's, and the pixels within sparse_fill_px of
+  // it its area. Wrong
   // matches on the background (a periodic pattern matches at many depths, some near the
   // origin's) form small components of their own.
   int best_count = 0;
   for (size_t k = 1; k < parts.count.size(); ++k) {
-    if (parts.nearest_m[k] < 0.5 * options.max_radius_m && parts.count[k] > best_count) {
+    if (parts.nearest_m[k] < 0.5 * options.max_radius_m && parts.count[k] > best_count &&
+        (!mask_selects || selected(k))) {
       best_count = parts.count[k];
       best_label = static_cast<int>(k);
     }

@@ -55,11 +55,11 @@ struct SegmentationReport {
 // What a given mask says about the object's pixels.
 enum class MaskRole {
   kBounds,   // the object lies within the mask (a user's mask, an interest map's part)
-  // The object holds some of the mask's pixels: with a dense depth map (DepthMap::dense, a
-  // sensor's), of the connected surfaces holding min_component_share of the mask's
-  // measured pixels the one nearest the origin is the object's, inside the mask or not
-  // (the blocks that moved: an untextured object moves in those along its outline only,
-  // and those hold the background's side too); else as kBounds.
+  // The object holds some of the mask's pixels (the blocks that moved: an untextured
+  // object moves in those along its outline only, and those hold the background's side
+  // too): the connected surfaces holding min_component_share of the mask's measured pixels
+  // are the candidates, the object's reaches beyond the mask. Dense depth (a sensor's): the
+  // candidate nearest the origin; sparse depth: the largest near it (as without a mask).
   kSelects,
 };
 
