@@ -356,23 +356,31 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
     rep.unconnected = before - parts.count[best_label];
     return out;
   }
-  // Sparse depth: of the components (a selecting mask's only) the largest that comes within
-  // half the radius of the origin is the object's, and the pixels within sparse_fill_px of
-  // it its area. Wrong
-  // matches on the background (a periodic pattern matches at many depths, some near the
-  // origin's) form small components of their own.
-  int best_count = 0;
-  for (size_t k = 1; k < parts.count.size(); ++k) {
-    if (parts.nearest_m[k] < 0.5 * options.max_radius_m && parts.count[k] > best_count &&
-        (!mask_selects || selected(k))) {
-      best_count = parts.count[k];
-      best_label = static_cast<int>(k);
+  // Sparse depth: of the components (those a selecting mask selects, if it selects any)
+  // the largest that comes within half the radius of the origin is the object's, and the
+  // pixels within sparse_fill_px of it its area. Wrong matches on the background (a
+  // periodic pattern matches at many depths, some near the origin's) form small components
+  // of their own. None near the origin: no object pixels.
+  auto largest_near = [&](bool only_selected) {
+    int label = 0, count = 0;
+    for (size_t k = 1; k < parts.count.size(); ++k) {
+      if (parts.nearest_m[k] < 0.5 * options.max_radius_m && parts.count[k] > count &&
+          (!only_selected || selected(k))) {
+        count = parts.count[k];
+        label = static_cast<int>(k);
+      }
     }
+    return label;
+  };
+  if (mask_selects) best_label = largest_near(true);
+  if (best_label == 0) best_label = largest_near(false);
+  if (best_label == 0) {
+    out_region.setTo(0);
+    rep.unconnected = before;
+    return out;
   }
-  const cv::Mat& labels = parts.labels;
-  const cv::Mat component = (labels == best_label) & (depth_region > 0.0f);
-  const int reached = best_label > 0 ? best_count : 0;
-  rep.unconnected = before - reached;
+  const cv::Mat component = (parts.labels == best_label) & (depth_region > 0.0f);
+  rep.unconnected = before - parts.count[best_label];
   // Dilated over the region only (out is empty beyond it).
   cv::Mat area;
   const int fill = options.sparse_fill_px;
