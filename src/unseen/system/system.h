@@ -55,17 +55,18 @@ struct SystemOptions {
   ModelUpdateOptions update;
   // The object is searched for again after this many frames lost in a row.
   int reselect_after_lost_frames = 10;
-  // An unknown object's model rebuilds take only the pixels that move with the tracked
-  // object (SPEC 5.5; select/interest_filter.h's TrackedMotionFilter, above
-  // rebuild_min_interest), where it moves enough in the image to tell.
+  // An unknown object's model rebuilds are selected by the pixels that move with the
+  // tracked object (SPEC 5.5; select/interest_filter.h's TrackedMotionFilter, above
+  // rebuild_min_interest; MaskRole::kSelects), where it moves enough in the image to tell.
   bool rebuild_from_tracked_motion = true;
-  // An unknown object's first model takes only the selected region's pixels that moved (the
-  // region's label) with measured depth (a sensor's: the hand or the table beside the object
-  // lie at its depth and the motion keeps them out; the real RGB-D cube without it 100 ->
-  // 92 %). With depth from the images (stereo, plane sweep) the whole region is modelled by
-  // default and the depth's own segmentation finds the object: a slowly moving object moves
-  // in few of its blocks and its model was a fragment (held-out three-camera teapot 50 ->
-  // 82 %, untextured rock 2.5 -> 30 %, banded goblet 17.5 -> 25 %).
+  // An unknown object's first model takes the selected region's pixels (the region's label)
+  // with measured depth: an interest map's part bounds the object (the table beside the
+  // real RGB-D cube lies at its depth; without it 100 -> 92 %), moving blocks select its
+  // surface (MaskRole::kSelects: they lie along its outline, on both sides). With depth
+  // from the images (stereo, plane sweep) the whole region is modelled by default and the
+  // depth's own segmentation finds the object: a slowly moving object moves in few of its
+  // blocks and its model was a fragment (held-out three-camera teapot 50 -> 82 %,
+  // untextured rock 2.5 -> 30 %, banded goblet 17.5 -> 25 %).
   bool first_model_from_motion_with_image_depth = false;
   TrackedMotionFilterOptions tracked_motion;
   double rebuild_min_interest = 0.3;
