@@ -6,7 +6,7 @@
 //   system:                      # SystemOptions
 //     regions: motion            # motion (segmentation) or interest (the map's parts)
 //     reselect_after_lost_frames: 10
-//     rebuild_from_tracked_motion: true  # rebuilds take the pixels moving with the object
+//     rebuild_from_tracked_motion: true  # rebuilds: the pixels moving with the object select it
 //   filters:                     # the interest filter bank (interest_filter_bank.h)
 //     - type: motion
 //       warmup_frames: 8
