@@ -368,6 +368,10 @@ property float x
 property float y
 property float z
 )";
+// kPlyHeader3 with one triangle's face list, up to the body.
+const std::string kPlyTriangleHeader =
+    std::string(kPlyHeader3) +
+    "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
 
 TEST_F(MeshIoTest, BadInputThrowsNamingTheFile) {
   const std::string missing = Path("does_not_exist.obj");
@@ -379,15 +383,11 @@ TEST_F(MeshIoTest, BadInputThrowsNamingTheFile) {
   ExpectThrowsMentioning([&] { LoadMesh(garbage_obj); }, {garbage_obj});
 
   const std::string out_of_range =
-      Write("range.ply", std::string(kPlyHeader3) +
-                             "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
-                             "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
+      Write("range.ply", kPlyTriangleHeader + "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
   ExpectThrowsMentioning([&] { LoadMesh(out_of_range); }, {out_of_range});
 
   const std::string nan_vertex =
-      Write("nan.ply", std::string(kPlyHeader3) +
-                           "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
-                           "0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n");
+      Write("nan.ply", kPlyTriangleHeader + "0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n");
   ExpectThrowsMentioning([&] { LoadMesh(nan_vertex); }, {nan_vertex});
 
   const std::string no_faces =
@@ -415,8 +415,7 @@ TEST_F(MeshIoTest, BadInputThrowsNamingTheFile) {
 // ASCII PLY elements are one per line: a face list count on a line of its own is read as
 // the count it is (and rejected when it does not fit its type), not as a coordinate.
 TEST_F(MeshIoTest, AsciiPlyValuesAreReadLineByLine) {
-  const std::string face = std::string(kPlyHeader3) +
-                           "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string face = kPlyTriangleHeader;
   const std::string short_line = Write("short.ply", face + "0 0 0\n1 0\n0\n1 0\n3 0 1 2\n");
   ExpectThrowsMentioning([&] { LoadMesh(short_line); }, {short_line, "1 0"});
   const std::string huge_count =
@@ -432,8 +431,7 @@ TEST_F(MeshIoTest, AsciiPlyValuesAreReadLineByLine) {
 // returns 0 without moving on, so the next property (here a list count) is read from the
 // same digits. Such a coordinate is an error naming it; one in exponent form is read.
 TEST_F(MeshIoTest, AsciiPlyCoordinateBeyond64BitsIsAnError) {
-  const std::string header = std::string(kPlyHeader3) +
-                             "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string header = kPlyTriangleHeader;
   const std::string beyond =
       Write("beyond.ply", header + "0 0 0\n1 0 118446744073709551616\n0 1 0\n3 0 1 2\n");
   ExpectThrowsMentioning([&] { LoadMesh(beyond); }, {beyond, "118446744073709551616"});
@@ -451,8 +449,7 @@ TEST_F(MeshIoTest, AsciiPlyCoordinateBeyond64BitsIsAnError) {
 TEST_F(MeshIoTest, AsciiPlyIntegerPropertyWithAFractionIsAnError) {
   // assimp reads an integer property's digits up to the '.': "8446744070739.1e-320616" (0 as
   // a number) was a list of 8e12 entries to it.
-  const std::string header = std::string(kPlyHeader3) +
-                             "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string header = kPlyTriangleHeader;
   const std::string fraction =
       Write("fraction.ply", header + "0 0 0\n1 0 0\n0 1 0\n8446744070739.1e-320616 0 1 2\n");
   ExpectThrowsMentioning([&] { LoadMesh(fraction); }, {fraction, "not an integer"});
@@ -465,8 +462,7 @@ TEST_F(MeshIoTest, AsciiPlyIntegerPropertyWithAFractionIsAnError) {
 TEST_F(MeshIoTest, AsciiPlyBodyWithAControlCharacterIsAnError) {
   // A NUL ended assimp's reading of the line where this one went on: its lists took their
   // counts from other values (an 8 GB allocation).
-  const std::string header = std::string(kPlyHeader3) +
-                             "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string header = kPlyTriangleHeader;
   std::string body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2 ";
   body += '\0';
   body += "4\n";
