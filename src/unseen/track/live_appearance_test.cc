@@ -211,6 +211,52 @@ TEST_F(LiveAppearance, AHeldTextureIsTakenAgainOnceItNoLongerFits) {
   EXPECT_LT(k, options.live_appearance.refresh_frames);
 }
 
+TEST_F(LiveAppearance, ProjectedColoursGiveWayToMeasuredDepth) {
+  // A model whose colours were projected onto it from a frame whose pose was 3 mm off (as
+  // an on-line model's key view sits on an approximate surface): its texture pulls the pose
+  // aside. With the frame's measured depth, the photometric modality keeps
+  // photometric.projected_with_depth_ratio of its weight and the depth holds the pose.
+  const RigCamera& camera = rig_.cameras[0];
+  const PinholeCamera& cam = camera.intrinsics;
+  const Rigid3d truth = CubePose();
+  const Rigid3d aside(truth.rotation(), truth.translation() + Eigen::Vector3d(0.003, 0.0, 0.0));
+  const std::optional<Projector> p =
+      CaptureProjector(testing::FlatCube(), cam, camera.cam_from_world() * truth, Image(aside),
+                       PixelRect{150, 40, 370, 220}, 0.003f);
+  ASSERT_TRUE(p.has_value());
+  Mesh projected = testing::FlatCube();
+  projected.projectors = {*p};
+  RenderBuffers buffers;
+  RenderOptions depth_only;
+  depth_only.write_color = false;
+  Render(testing::FlatCube(), cam, camera.cam_from_world() * truth, cam.ImageRect(), depth_only,
+         &buffers);
+  Frame frame;
+  frame.images = {Image(truth)};
+  frame.depths = {cv::Mat(buffers.depth.size(), CV_32FC1, cv::Scalar(1.6f))};
+  buffers.depth.copyTo(frame.depths[0], buffers.mask);
+  auto error_mm = [&](double ratio, bool with_depth) {
+    TrackerOptions options;
+    options.photometric.projected_with_depth_ratio = ratio;
+    options.photometric.start_drag_px = 0.0;  // the colours stay in use whatever they pull
+    options.photometric.min_start_fit = 0.0;
+    Tracker tracker(rig_, projected, options);
+    tracker.Initialize(truth);
+    Frame input = frame;
+    if (!with_depth) input.depths.clear();
+    TrackResult r;
+    for (int k = 0; k < 4; ++k) r = tracker.Track(input);
+    EXPECT_TRUE(tracker.photometric_in_use());
+    return 1e3 * Difference(r.world_from_obj, truth).translation;
+  };
+  const double full = error_mm(1.0, true);
+  const double reduced = error_mm(0.3, true);
+  EXPECT_GT(full, 0.5) << "the displaced colours should pull the pose aside";
+  EXPECT_LT(reduced, 0.6 * full);
+  // Without depth, the colours keep their whole weight: the ratio changes nothing.
+  EXPECT_DOUBLE_EQ(error_mm(0.3, false), error_mm(1.0, false));
+}
+
 TEST(LiveAppearanceOptions, CheckRejectsBadValues) {
   LiveAppearanceOptions o;
   EXPECT_NO_THROW(o.Check());
@@ -231,6 +277,11 @@ TEST(LiveAppearanceOptions, CheckRejectsBadValues) {
   EXPECT_DOUBLE_EQ(
       ParseTrackerOptions("live_appearance: {refresh_share_ratio: 0.5}").live_appearance.refresh_share_ratio,
       0.5);
+  EXPECT_DOUBLE_EQ(ParseTrackerOptions("photometric: {projected_with_depth_ratio: 0.5}")
+                       .photometric.projected_with_depth_ratio,
+                   0.5);
+  EXPECT_THROW(ParseTrackerOptions("photometric: {projected_with_depth_ratio: 0}"), Error);
+  EXPECT_THROW(ParseTrackerOptions("photometric: {projected_with_depth_ratio: 1.5}"), Error);
 }
 
 }  // namespace

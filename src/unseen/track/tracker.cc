@@ -430,11 +430,14 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
   photometric_model.kernel = options_.solver.kernel;
   photometric_model.kernel_width = options_.solver.kernel_width;
   photometric_model.min_scale = options_.solver.min_scale_px;
+  const bool use_depth = !frame.depths.empty();
   photometric_model.weight = model_ != given_model_ ? options_.live_appearance.photometric_weight
                                                     : options_.photometric.weight;
+  if (model_ == given_model_ && use_depth && !model_->projectors.empty()) {
+    photometric_model.weight *= options_.photometric.projected_with_depth_ratio;
+  }
   if (photometric_demoted_) photometric_model.weight *= options_.photometric.dragged_weight;
   region_.DiscardPending();
-  const bool use_depth = !frame.depths.empty();
   std::vector<int> jobs;  // c: camera c's virtual image; ncam + c: its input
   for (auto& w : work_) {
     w->times = StageTimes();

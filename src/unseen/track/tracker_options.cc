@@ -182,6 +182,9 @@ void PhotometricOptions::Check() const {
                "photometric.start_drag_ratio {} must be >= 1", start_drag_ratio);
   UNSEEN_CHECK(dragged_weight >= 0.0 && dragged_weight <= 1.0,
                "photometric.dragged_weight {} must be in [0, 1]", dragged_weight);
+  UNSEEN_CHECK(projected_with_depth_ratio > 0.0 && projected_with_depth_ratio <= 1.0,
+               "photometric.projected_with_depth_ratio {} must be in (0, 1]",
+               projected_with_depth_ratio);
   UNSEEN_CHECK(light_change_fit >= 0.0 && light_change_fit <= 1.0,
                "photometric.light_change_fit {} must be in [0, 1]", light_change_fit);
   UNSEEN_CHECK(light_change_max_gathering >= 0.0 && light_change_max_gathering <= 1.0,
@@ -214,6 +217,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"start_drag_px", YamlField(&ph.start_drag_px)},
         {"start_drag_ratio", YamlField(&ph.start_drag_ratio)},
         {"dragged_weight", YamlField(&ph.dragged_weight)},
+        {"projected_with_depth_ratio", YamlField(&ph.projected_with_depth_ratio)},
         {"light_change_fit", YamlField(&ph.light_change_fit)},
         {"light_change_max_gathering", YamlField(&ph.light_change_max_gathering)},
         {"weight", YamlField(&ph.weight)}}},
