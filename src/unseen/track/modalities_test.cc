@@ -334,6 +334,44 @@ TEST_F(ModalityScene, ASilhouetteOffItsContourVouchesLess) {
                Error);
 }
 
+TEST_F(ModalityScene, ASmallTwinTouchingTheOutlineDoesNotLoseTheObject) {
+  // The flat cube is tracked by its silhouette alone (no texture could tell an occluder);
+  // then a small cube of the same colour touches one side of its outline, as a look-alike
+  // passing behind does. Most of the contour still sits on the image's edge: judged on its
+  // best lines (FailureOptions::occluded_region_share), the frame stays tracked; judged
+  // on all of them, the few lines that run on into the twin would make it lost.
+  Mesh crowd = flat_;
+  const int n = crowd.num_vertices();
+  for (int v = 0; v < n; ++v) {  // a third of its size, just beside one face
+    crowd.vertices.push_back(0.3f * flat_.vertices[v] + Eigen::Vector3f(0.07f, 0.0f, 0.0f));
+  }
+  for (const Eigen::Vector3i& t : flat_.triangles) {
+    crowd.triangles.push_back(t + Eigen::Vector3i::Constant(n));
+  }
+  if (!crowd.triangle_materials.empty()) {
+    crowd.triangle_materials.insert(crowd.triangle_materials.end(),
+                                    flat_.triangle_materials.begin(),
+                                    flat_.triangle_materials.end());
+  }
+  if (!crowd.normals.empty()) {
+    crowd.normals.insert(crowd.normals.end(), flat_.normals.begin(), flat_.normals.end());
+  }
+  const cv::Mat touched = testing::RenderOverBackground(crowd, rig_.cameras[0], truth_, background_);
+  auto confidence_beside_twin = [&](double region_share) {
+    TrackerOptions options;
+    options.failure.occluded_region_share = region_share;
+    Tracker tracker(rig_, flat_, options);
+    tracker.Initialize(truth_);
+    for (int k = 0; k < 5; ++k) tracker.Track({frame_.images[0]});
+    EXPECT_FALSE(tracker.photometric_in_use());
+    return tracker.Align({touched}, truth_, 1).confidence;
+  };
+  const double best_lines = confidence_beside_twin(0.9);
+  const double all_lines = confidence_beside_twin(1.0);
+  EXPECT_GE(best_lines, TrackerOptions().reacquisition.doubtful_confidence);
+  EXPECT_LT(all_lines, best_lines);
+}
+
 TEST_F(ModalityScene, DepthDisagreementMakesAPoseFarAwayLost) {
   // A start 30 cm behind the object (the image shows it, the depth does not agree):
   // the alignment cannot pull it in, and depth must not let it count as tracked.

@@ -618,10 +618,11 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
         s.depth_equations = solution.modalities[1].equations;
         s.depth_residual_m = solution.modalities[1].initial_rms;
         s.region_counts = region_counts;
-        // Behind an occluder the silhouette is judged on its best lines
-        // (FailureOptions::occluded_region_share).
+        // Behind an occluder, or with no texture to find one, the silhouette is judged on
+        // its best lines (FailureOptions::occluded_region_share).
         const double region_share = options_.failure.occluded_region_share;
-        s.region_residual = counts.occluded_gradient > 0 && region_share < 1.0
+        const bool may_be_occluded = counts.occluded_gradient > 0 || !use_photometric_;
+        s.region_residual = may_be_occluded && region_share < 1.0
                                 ? region_.equations().TrimmedRms(region_share)
                                 : solution.modalities[2].initial_rms;
         s.counts = counts;
