@@ -388,6 +388,32 @@ TEST_F(ModalityScene, DepthDisagreementMakesAPoseFarAwayLost) {
   EXPECT_LT(agreement, options.depth.bad_agreement);
 }
 
+TEST_F(ModalityScene, DepthJudgesWhereTheSilhouettesColoursCannot) {
+  // The flat cube before a wall of its own colour (a white object on white paper): the
+  // silhouette's colours cannot tell the object from its surroundings, the measured depth
+  // can. The frames stay tracked at the true pose, and a pose far off is still lost.
+  const cv::Vec3f colour(flat_.materials[0].diffuse_bgr.x(), flat_.materials[0].diffuse_bgr.y(),
+                         flat_.materials[0].diffuse_bgr.z());
+  const cv::Mat same(background_.size(), CV_32FC3, cv::Scalar(colour[0], colour[1], colour[2]));
+  Frame frame;
+  frame.images = {testing::RenderOverBackground(flat_, rig_.cameras[0], truth_, same)};
+  frame.depths = frame_.depths;
+  Tracker tracker(rig_, flat_);
+  tracker.Initialize(truth_);
+  TrackResult r;
+  for (int k = 0; k < 5; ++k) {
+    r = tracker.Track(frame);
+    EXPECT_EQ(r.status, TrackStatus::kTracking) << k << ": " << r.BriefReport();
+  }
+  EXPECT_LT(r.summary.region_counts.used, r.summary.region_counts.lines / 2) << r.BriefReport();
+  EXPECT_GE(r.confidence, TrackerOptions().reacquisition.doubtful_confidence) << r.BriefReport();
+  EXPECT_LT(Difference(r.world_from_obj, truth_).translation, 0.003) << r.BriefReport();
+  Vector6d d = Vector6d::Zero();
+  d(2) = 0.30;
+  const TrackResult far = tracker.Align(frame, Perturb(truth_, d), 1);
+  EXPECT_LT(far.confidence, TrackerOptions().failure.lost_confidence) << far.BriefReport();
+}
+
 TEST(DepthModality, RowsVanishAtTheTruePose) {
   const Rig rig = testing::OneCameraRig();
   const Mesh cube = testing::FlatCube();

@@ -96,7 +96,17 @@ double Tracker::ModalityConfidence(const SolveSummary& s, bool with_references) 
       Ramp(depth_agreement, options_.depth.bad_agreement, options_.depth.good_agreement);
   // Depth alone (no image modality in use) judges by itself.
   const bool image_judges = PhotometricJudges() || options_.region.enabled;
-  return depth_term * (image_judges ? std::max(photometric, region_term) : 1.0);
+  if (!image_judges) return depth_term;
+  // The silhouette judges only as far as its colours tell the object from its surroundings:
+  // lines whose colours do not (too little contrast, an unsure contour) gave no row. Where
+  // few did (a white object on white paper), its low agreement is its colours', not a
+  // contradiction, and the measured depth judges in its place.
+  double silhouette = region_term;
+  if (s.region_counts.lines > 0) {
+    const double informative = double(s.region_counts.used) / double(s.region_counts.lines);
+    silhouette = 1.0 - informative * (1.0 - region_term);
+  }
+  return depth_term * std::max(photometric, silhouette);
 }
 
 double Tracker::RegionResidualRatio(const SolveSummary& s) const {
