@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "unseen/util/error.h"
 
@@ -14,6 +15,8 @@ void DepthModalityOptions::Check() const {
   UNSEEN_CHECK(max_distance_m > 0.0 && std::isfinite(max_distance_m),
                "depth.max_distance_m {} must be > 0", max_distance_m);
   residual.Check("depth");
+  UNSEEN_CHECK(occluder_margin_m >= 0.0 && std::isfinite(occluder_margin_m),
+               "depth.occluder_margin_m {} must be >= 0", occluder_margin_m);
   UNSEEN_CHECK(agree_distance_m > 0.0 && std::isfinite(agree_distance_m),
                "depth.agree_distance_m {} must be > 0", agree_distance_m);
   UNSEEN_CHECK(0.0 <= bad_agreement && bad_agreement < good_agreement && good_agreement <= 1.0,
@@ -81,17 +84,23 @@ void AddDepthEquations(const DepthModalityInput& in, const DepthModalityOptions&
   auto first_on_grid = [step](int origin) {
     return 1 + ((step - (origin + 1) % step) % step);  // >= 1, (first + origin) % step == 0
   };
+  // 1. Association: each sampled pixel's measured point (the nearest pixel where p projects
+  // at full resolution).
+  struct Pair {
+    int x, y;     // rendered pixel (roi)
+    int mx, my;   // measured pixel
+    float z, zm;  // rendered and measured depth
+  };
+  thread_local std::vector<Pair> pairs;
+  pairs.clear();
+  long in_front = 0;  // measured nearer than the render by more than occluder_margin_m
   for (int y = first_on_grid(in.roi.y0); y < height - 1; y += step) {
     const float* row = rendered.ptr<float>(y);
-    const float* up = rendered.ptr<float>(y - 1);
-    const float* down = rendered.ptr<float>(y + 1);
     for (int x = first_on_grid(in.roi.x0); x < width - 1; x += step) {
       const float z = row[x];
       if (z <= 0.0f) continue;
       ++c.sampled;
-      const Eigen::Vector3d p = back_project(x, y, z);
-      // The measured point where p projects at full resolution (nearest pixel).
-      const Eigen::Vector2d pix = fc.Project(p);
+      const Eigen::Vector2d pix = fc.Project(back_project(x, y, z));
       const int mx = int(std::lround(pix.x())), my = int(std::lround(pix.y()));
       if (mx < 0 || my < 0 || mx >= fc.width || my >= fc.height) continue;
       const float zm = measured.ptr<float>(my)[mx];
@@ -100,36 +109,52 @@ void AddDepthEquations(const DepthModalityInput& in, const DepthModalityOptions&
       const double dz = double(zm) - double(z);
       if (std::abs(dz) <= options.agree_distance_m) ++c.agreeing;
       if (dz < -options.agree_distance_m) ++c.hidden;
-      if (std::abs(dz) > gate) continue;
-      // Normal from central differences of the rendered surface.
-      const float zl = row[x - 1], zr = row[x + 1], zu = up[x], zd = down[x];
-      if (zl <= 0.0f || zr <= 0.0f || zu <= 0.0f || zd <= 0.0f) continue;
-      if (std::abs(zl - z) > max_step_depth || std::abs(zr - z) > max_step_depth ||
-          std::abs(zu - z) > max_step_depth || std::abs(zd - z) > max_step_depth) {
-        continue;
-      }
-      const Eigen::Vector3d tx = back_project(x + 1, y, zr) - back_project(x - 1, y, zl);
-      const Eigen::Vector3d ty = back_project(x, y + 1, zd) - back_project(x, y - 1, zu);
-      Eigen::Vector3d n = ty.cross(tx);
-      const double norm = n.norm();
-      if (!(norm > 0.0)) continue;
-      n /= norm;
-      if (n.dot(p) > 0.0) n = -n;  // facing the camera
-      // Grazing surfaces measure badly and their normal is unreliable.
-      if (-n.dot(p.normalized()) < 0.2) continue;
-      const Eigen::Vector3d q = fc.Unproject(Eigen::Vector2d(mx, my), zm);
-      const float b = static_cast<float>(n.dot(q - p));
-      const float pr[3] = {float(p.x()) - o[0], float(p.y()) - o[1], float(p.z()) - o[2]};
-      const float nf[3] = {float(n.x()), float(n.y()), float(n.z())};
-      const float a[6] = {nf[0],
-                          nf[1],
-                          nf[2],
-                          pr[1] * nf[2] - pr[2] * nf[1],
-                          pr[2] * nf[0] - pr[0] * nf[2],
-                          pr[0] * nf[1] - pr[1] * nf[0]};
-      out->Add(a, b, 1.0f);
-      ++c.used;
+      if (dz < -options.occluder_margin_m) ++in_front;
+      pairs.push_back({x, y, mx, my, z, zm});
     }
+  }
+  // A measured surface in front of the rendered one is an occluder (a hand holding the
+  // object): no row, unless most of the object is behind one (the pose is behind the
+  // measured surface, and every row pulls it forward).
+  const bool skip_in_front = options.occluder_margin_m > 0.0 && 2 * in_front < c.measured;
+  // 2. Rows.
+  for (const Pair& pair : pairs) {
+    const int x = pair.x, y = pair.y;
+    const float z = pair.z;
+    const double dz = double(pair.zm) - double(z);
+    if (std::abs(dz) > gate) continue;
+    if (skip_in_front && dz < -options.occluder_margin_m) continue;
+    // Normal from central differences of the rendered surface.
+    const float* row = rendered.ptr<float>(y);
+    const float zl = row[x - 1], zr = row[x + 1];
+    const float zu = rendered.ptr<float>(y - 1)[x], zd = rendered.ptr<float>(y + 1)[x];
+    if (zl <= 0.0f || zr <= 0.0f || zu <= 0.0f || zd <= 0.0f) continue;
+    if (std::abs(zl - z) > max_step_depth || std::abs(zr - z) > max_step_depth ||
+        std::abs(zu - z) > max_step_depth || std::abs(zd - z) > max_step_depth) {
+      continue;
+    }
+    const Eigen::Vector3d p = back_project(x, y, z);
+    const Eigen::Vector3d tx = back_project(x + 1, y, zr) - back_project(x - 1, y, zl);
+    const Eigen::Vector3d ty = back_project(x, y + 1, zd) - back_project(x, y - 1, zu);
+    Eigen::Vector3d n = ty.cross(tx);
+    const double norm = n.norm();
+    if (!(norm > 0.0)) continue;
+    n /= norm;
+    if (n.dot(p) > 0.0) n = -n;  // facing the camera
+    // Grazing surfaces measure badly and their normal is unreliable.
+    if (-n.dot(p.normalized()) < 0.2) continue;
+    const Eigen::Vector3d q = fc.Unproject(Eigen::Vector2d(pair.mx, pair.my), pair.zm);
+    const float b = static_cast<float>(n.dot(q - p));
+    const float pr[3] = {float(p.x()) - o[0], float(p.y()) - o[1], float(p.z()) - o[2]};
+    const float nf[3] = {float(n.x()), float(n.y()), float(n.z())};
+    const float a[6] = {nf[0],
+                        nf[1],
+                        nf[2],
+                        pr[1] * nf[2] - pr[2] * nf[1],
+                        pr[2] * nf[0] - pr[0] * nf[2],
+                        pr[0] * nf[1] - pr[1] * nf[0]};
+    out->Add(a, b, 1.0f);
+    ++c.used;
   }
   *counts += c;
 }

@@ -31,6 +31,28 @@ Rigid3d Perturb(const Rigid3d& pose, const Vector6d& d) {
   return Rigid3d(ExpSO3(d.tail<3>()) * pose.rotation(), pose.translation() + d.head<3>());
 }
 
+// `base` with a copy of itself scaled by `scale` (per object axis) and moved by `offset`
+// (metres, object frame) added: an object with something touching or holding it.
+Mesh WithBlock(const Mesh& base, const Eigen::Vector3f& scale, const Eigen::Vector3f& offset) {
+  Mesh out = base;
+  const int n = base.num_vertices();
+  for (int v = 0; v < n; ++v) {
+    out.vertices.push_back(scale.cwiseProduct(base.vertices[v]) + offset);
+  }
+  for (const Eigen::Vector3i& t : base.triangles) {
+    out.triangles.push_back(t + Eigen::Vector3i::Constant(n));
+  }
+  if (!out.triangle_materials.empty()) {
+    out.triangle_materials.insert(out.triangle_materials.end(), base.triangle_materials.begin(),
+                                  base.triangle_materials.end());
+  }
+  if (!out.uvs.empty()) out.uvs.insert(out.uvs.end(), base.uvs.begin(), base.uvs.end());
+  if (!out.normals.empty()) {
+    out.normals.insert(out.normals.end(), base.normals.begin(), base.normals.end());
+  }
+  return out;
+}
+
 // Metric depth of `mesh` at `world_from_obj` in front of a wall at `wall_m`, as an RGB-D
 // camera registered to the colour camera measures it.
 cv::Mat DepthImage(const Mesh& mesh, const RigCamera& camera, const Rigid3d& world_from_obj,
@@ -298,20 +320,8 @@ TEST_F(ModalityScene, ASilhouetteOffItsContourVouchesLess) {
   // stands right beside it. Its colours agree with the learnt statistics, but along that
   // side the contour no longer sits where the image's edge is: the region modality's
   // residual against its confident frames' lowers what it vouches for.
-  Mesh pair = flat_;
-  const int n = pair.num_vertices();
-  for (int v = 0; v < n; ++v) pair.vertices.push_back(flat_.vertices[v] + Eigen::Vector3f(0.07f, 0.0f, 0.0f));
-  for (const Eigen::Vector3i& t : flat_.triangles) {
-    pair.triangles.push_back(t + Eigen::Vector3i::Constant(n));
-  }
-  if (!pair.triangle_materials.empty()) {
-    pair.triangle_materials.insert(pair.triangle_materials.end(), flat_.triangle_materials.begin(),
-                                   flat_.triangle_materials.end());
-  }
-  if (!pair.uvs.empty()) pair.uvs.insert(pair.uvs.end(), flat_.uvs.begin(), flat_.uvs.end());
-  if (!pair.normals.empty()) {
-    pair.normals.insert(pair.normals.end(), flat_.normals.begin(), flat_.normals.end());
-  }
+  const Mesh pair =
+      WithBlock(flat_, Eigen::Vector3f::Ones(), Eigen::Vector3f(0.07f, 0.0f, 0.0f));
   const cv::Mat crowded =
       testing::RenderOverBackground(pair, rig_.cameras[0], truth_, background_);
   auto confidence_beside_twin = [&](const TrackerOptions& options) {
@@ -340,22 +350,9 @@ TEST_F(ModalityScene, ASmallTwinTouchingTheOutlineDoesNotLoseTheObject) {
   // passing behind does. Most of the contour still sits on the image's edge: judged on its
   // best lines (FailureOptions::occluded_region_share), the frame stays tracked; judged
   // on all of them, the few lines that run on into the twin would make it lost.
-  Mesh crowd = flat_;
-  const int n = crowd.num_vertices();
-  for (int v = 0; v < n; ++v) {  // a third of its size, just beside one face
-    crowd.vertices.push_back(0.3f * flat_.vertices[v] + Eigen::Vector3f(0.07f, 0.0f, 0.0f));
-  }
-  for (const Eigen::Vector3i& t : flat_.triangles) {
-    crowd.triangles.push_back(t + Eigen::Vector3i::Constant(n));
-  }
-  if (!crowd.triangle_materials.empty()) {
-    crowd.triangle_materials.insert(crowd.triangle_materials.end(),
-                                    flat_.triangle_materials.begin(),
-                                    flat_.triangle_materials.end());
-  }
-  if (!crowd.normals.empty()) {
-    crowd.normals.insert(crowd.normals.end(), flat_.normals.begin(), flat_.normals.end());
-  }
+  // A third of its size, just beside one face.
+  const Mesh crowd =
+      WithBlock(flat_, Eigen::Vector3f::Constant(0.3f), Eigen::Vector3f(0.07f, 0.0f, 0.0f));
   const cv::Mat touched = testing::RenderOverBackground(crowd, rig_.cameras[0], truth_, background_);
   auto confidence_beside_twin = [&](double region_share) {
     TrackerOptions options;
@@ -414,31 +411,80 @@ TEST_F(ModalityScene, DepthJudgesWhereTheSilhouettesColoursCannot) {
   EXPECT_LT(far.confidence, TrackerOptions().failure.lost_confidence) << far.BriefReport();
 }
 
-TEST(DepthModality, RowsVanishAtTheTruePose) {
-  const Rig rig = testing::OneCameraRig();
-  const Mesh cube = testing::FlatCube();
-  const Rigid3d cam_from_obj = CubePose();
-  const cv::Mat measured = DepthImage(cube, rig.cameras[0], cam_from_obj, 1.6f);
+// The flat cube rendered at CubePose() in one camera, and the depth modality's input for a
+// measured depth image of it.
+struct DepthScene {
+  DepthScene() {
+    RenderOptions options;
+    options.write_color = false;
+    Render(cube, rig.cameras[0].intrinsics, cam_from_obj, roi, options, &rendered);
+  }
+  cv::Mat TrueDepth() const { return DepthImage(cube, rig.cameras[0], cam_from_obj, 1.6f); }
+  DepthModalityInput Input(const cv::Mat* measured) const {
+    DepthModalityInput in;
+    in.rendered_depth = &rendered.depth;
+    in.roi = roi;
+    in.level_camera = rig.cameras[0].intrinsics;
+    in.measured_depth = measured;
+    in.camera = rig.cameras[0].intrinsics;
+    in.origin_in_cam = cam_from_obj.translation();
+    return in;
+  }
+  Rig rig = testing::OneCameraRig();
+  Mesh cube = testing::FlatCube();
+  Rigid3d cam_from_obj = CubePose();
+  PixelRect roi{150, 50, 370, 210};
   RenderBuffers rendered;
-  RenderOptions ro;
-  ro.write_color = false;
-  const PixelRect roi{150, 50, 370, 210};
-  Render(cube, rig.cameras[0].intrinsics, cam_from_obj, roi, ro, &rendered);
-  DepthModalityInput in;
-  in.rendered_depth = &rendered.depth;
-  in.roi = roi;
-  in.level_camera = rig.cameras[0].intrinsics;
-  in.measured_depth = &measured;
-  in.camera = rig.cameras[0].intrinsics;
-  in.origin_in_cam = cam_from_obj.translation();
+};
+
+TEST(DepthModality, RowsVanishAtTheTruePose) {
+  const DepthScene scene;
+  const cv::Mat measured = scene.TrueDepth();
   FlowEquations eq;
   DepthCounts counts;
-  AddDepthEquations(in, DepthModalityOptions(), &eq, &counts);
+  AddDepthEquations(scene.Input(&measured), DepthModalityOptions(), &eq, &counts);
   ASSERT_GT(eq.size(), 200);
   for (int i = 0; i < eq.size(); ++i) EXPECT_LT(std::abs(eq.rhs[i]), 1e-4) << i;
   EXPECT_EQ(counts.agreeing, counts.measured);
   EXPECT_EQ(counts.hidden, 0);
   EXPECT_NEAR(counts.Agreement(DepthModalityOptions()), 1.0, 1e-12);
+}
+
+TEST(DepthModality, ASurfaceInFrontGivesNoRowsUnlessMostOfTheObjectIsBehindOne) {
+  // The measured depth of the cube at its true pose, with a band of the image 19 mm nearer
+  // (a finger across it). Within the gate, those pairs would give rows that pull the face
+  // towards the finger; nearer by more than occluder_margin_m, they are an occluder and give
+  // none. When most of the object is behind the measured surface, the pose is behind it:
+  // then every pair gives its row.
+  const DepthScene scene;
+  const cv::Mat truth = scene.TrueDepth();
+  const PixelRect& roi = scene.roi;
+  auto rows = [&](int band_rows, double margin_m, DepthCounts* counts) {
+    cv::Mat measured = truth.clone();
+    cv::Mat band = measured(cv::Rect(0, roi.y0, measured.cols, band_rows));
+    band -= 0.019f;
+    DepthModalityOptions options;
+    options.occluder_margin_m = margin_m;
+    FlowEquations eq;
+    AddDepthEquations(scene.Input(&measured), options, &eq, counts);
+    int in_front = 0;
+    for (int i = 0; i < eq.size(); ++i) in_front += eq.rhs[i] > 0.005f;  // towards the camera
+    return std::make_pair(eq.size(), in_front);
+  };
+  const double margin = DepthModalityOptions().occluder_margin_m;
+  DepthCounts partly, kept_counts, mostly;
+  const auto [rows_partly, front_partly] = rows(60, margin, &partly);
+  const auto [rows_kept, front_kept] = rows(60, 0.0, &kept_counts);
+  EXPECT_GT(partly.hidden, 30);
+  EXPECT_LT(2 * partly.hidden, partly.measured);
+  EXPECT_EQ(front_partly, 0) << "no row from the surface in front";
+  EXPECT_GT(rows_partly, 100);
+  EXPECT_GT(front_kept, 30) << "without the margin, the surface in front gives rows";
+  EXPECT_GT(rows_kept, rows_partly);
+  const auto [rows_mostly, front_mostly] = rows(roi.height(), margin, &mostly);
+  EXPECT_GT(2 * mostly.hidden, mostly.measured);
+  EXPECT_GT(front_mostly, 100) << "the pose is behind the measured surface: every row";
+  EXPECT_THROW(ParseTrackerOptions("depth: {occluder_margin_m: -0.01}\n"), Error);
 }
 
 TEST(RegionModality, HistogramsLearnAndJudgeColours) {
