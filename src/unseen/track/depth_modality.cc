@@ -17,6 +17,8 @@ void DepthModalityOptions::Check() const {
   residual.Check("depth");
   UNSEEN_CHECK(occluder_margin_m >= 0.0 && std::isfinite(occluder_margin_m),
                "depth.occluder_margin_m {} must be >= 0", occluder_margin_m);
+  UNSEEN_CHECK(occluder_margin_sigmas >= 0.0 && std::isfinite(occluder_margin_sigmas),
+               "depth.occluder_margin_sigmas {} must be >= 0", occluder_margin_sigmas);
   UNSEEN_CHECK(agree_distance_m > 0.0 && std::isfinite(agree_distance_m),
                "depth.agree_distance_m {} must be > 0", agree_distance_m);
   UNSEEN_CHECK(0.0 <= bad_agreement && bad_agreement < good_agreement && good_agreement <= 1.0,
@@ -115,15 +117,32 @@ void AddDepthEquations(const DepthModalityInput& in, const DepthModalityOptions&
   }
   // A measured surface in front of the rendered one is an occluder (a hand holding the
   // object): no row, unless most of the object is behind one (the pose is behind the
-  // measured surface, and every row pulls it forward).
-  const bool skip_in_front = options.occluder_margin_m > 0.0 && 2 * in_front < c.measured;
+  // measured surface, and every row pulls it forward). The margin is at least
+  // occluder_margin_sigmas robust standard deviations of the pairs' differences: where the
+  // sensor's noise is of that size (far from it), cutting its near side only would push
+  // the object away.
+  double margin = options.occluder_margin_m;
+  if (margin > 0.0 && pairs.size() >= 10) {
+    thread_local std::vector<float> dzs;
+    dzs.clear();
+    for (const Pair& pair : pairs) dzs.push_back(pair.zm - pair.z);
+    auto middle = dzs.begin() + dzs.size() / 2;
+    std::nth_element(dzs.begin(), middle, dzs.end());
+    const float median = *middle;
+    for (float& d : dzs) d = std::abs(d - median);
+    std::nth_element(dzs.begin(), middle, dzs.end());
+    margin = std::max(margin, options.occluder_margin_sigmas * 1.4826 * double(*middle));
+    in_front = 0;
+    for (const Pair& pair : pairs) in_front += double(pair.zm) - double(pair.z) < -margin;
+  }
+  const bool skip_in_front = margin > 0.0 && 2 * in_front < c.measured;
   // 2. Rows.
   for (const Pair& pair : pairs) {
     const int x = pair.x, y = pair.y;
     const float z = pair.z;
     const double dz = double(pair.zm) - double(z);
     if (std::abs(dz) > gate) continue;
-    if (skip_in_front && dz < -options.occluder_margin_m) continue;
+    if (skip_in_front && dz < -margin) continue;
     // Normal from central differences of the rendered surface.
     const float* row = rendered.ptr<float>(y);
     const float zl = row[x - 1], zr = row[x + 1];
