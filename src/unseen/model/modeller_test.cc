@@ -453,6 +453,10 @@ TEST(ModellerOptionsYaml, ReadsEverySectionAndNamesWhatIsWrong) {
   EXPECT_NE(message("mesh: {cell_px: many}").find("bad.yaml"), std::string::npos);
   EXPECT_NE(message("plane_sweep: {disparity_step_px: -1}").find("disparity_step_px"),
             std::string::npos);
+  EXPECT_NE(message("segmentation: {min_component_share: 1.5}").find("min_component_share"),
+            std::string::npos);
+  EXPECT_NE(message("model: {sensor_mask_depth_quantile: -0.1}").find("sensor_mask_depth"),
+            std::string::npos);
   EXPECT_THROW(LoadModellerOptions("/nonexistent/model.yaml"), Error);
 }
 

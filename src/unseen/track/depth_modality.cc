@@ -92,10 +92,10 @@ void AddDepthEquations(const DepthModalityInput& in, const DepthModalityOptions&
     int x, y;     // rendered pixel (roi)
     int mx, my;   // measured pixel
     float z, zm;  // rendered and measured depth
+    double dz;    // zm - z
   };
   thread_local std::vector<Pair> pairs;
   pairs.clear();
-  long in_front = 0;  // measured nearer than the render by more than occluder_margin_m
   for (int y = first_on_grid(in.roi.y0); y < height - 1; y += step) {
     const float* row = rendered.ptr<float>(y);
     for (int x = first_on_grid(in.roi.x0); x < width - 1; x += step) {
@@ -111,8 +111,7 @@ void AddDepthEquations(const DepthModalityInput& in, const DepthModalityOptions&
       const double dz = double(zm) - double(z);
       if (std::abs(dz) <= options.agree_distance_m) ++c.agreeing;
       if (dz < -options.agree_distance_m) ++c.hidden;
-      if (dz < -options.occluder_margin_m) ++in_front;
-      pairs.push_back({x, y, mx, my, z, zm});
+      pairs.push_back({x, y, mx, my, z, zm, dz});
     }
   }
   // A measured surface in front of the rendered one is an occluder (a hand holding the
@@ -125,24 +124,23 @@ void AddDepthEquations(const DepthModalityInput& in, const DepthModalityOptions&
   if (margin > 0.0 && pairs.size() >= 10) {
     thread_local std::vector<float> dzs;
     dzs.clear();
-    for (const Pair& pair : pairs) dzs.push_back(pair.zm - pair.z);
+    for (const Pair& pair : pairs) dzs.push_back(float(pair.dz));
     auto middle = dzs.begin() + dzs.size() / 2;
     std::nth_element(dzs.begin(), middle, dzs.end());
     const float median = *middle;
     for (float& d : dzs) d = std::abs(d - median);
     std::nth_element(dzs.begin(), middle, dzs.end());
     margin = std::max(margin, options.occluder_margin_sigmas * 1.4826 * double(*middle));
-    in_front = 0;
-    for (const Pair& pair : pairs) in_front += double(pair.zm) - double(pair.z) < -margin;
   }
+  long in_front = 0;  // measured nearer than the render by more than the margin
+  for (const Pair& pair : pairs) in_front += pair.dz < -margin;
   const bool skip_in_front = margin > 0.0 && 2 * in_front < c.measured;
   // 2. Rows.
   for (const Pair& pair : pairs) {
     const int x = pair.x, y = pair.y;
     const float z = pair.z;
-    const double dz = double(pair.zm) - double(z);
-    if (std::abs(dz) > gate) continue;
-    if (skip_in_front && dz < -margin) continue;
+    if (std::abs(pair.dz) > gate) continue;
+    if (skip_in_front && pair.dz < -margin) continue;
     // Normal from central differences of the rendered surface.
     const float* row = rendered.ptr<float>(y);
     const float zl = row[x - 1], zr = row[x + 1];

@@ -485,6 +485,8 @@ TEST(DepthModality, ASurfaceInFrontGivesNoRowsUnlessMostOfTheObjectIsBehindOne) 
   EXPECT_GT(2 * mostly.hidden, mostly.measured);
   EXPECT_GT(front_mostly, 100) << "the pose is behind the measured surface: every row";
   EXPECT_THROW(ParseTrackerOptions("depth: {occluder_margin_m: -0.01}\n"), Error);
+  EXPECT_THROW(ParseTrackerOptions("depth: {occluder_margin_sigmas: -1}\n"), Error);
+  EXPECT_THROW(ParseTrackerOptions("depth: {occluder_margin_sigmas: .nan}\n"), Error);
 }
 
 TEST(RegionModality, HistogramsLearnAndJudgeColours) {
