@@ -19,6 +19,10 @@ void DepthModalityOptions::Check() const {
                "depth.occluder_margin_m {} must be >= 0", occluder_margin_m);
   UNSEEN_CHECK(occluder_margin_sigmas >= 0.0 && std::isfinite(occluder_margin_sigmas),
                "depth.occluder_margin_sigmas {} must be >= 0", occluder_margin_sigmas);
+  UNSEEN_CHECK(roughness_noise_factor > 0.0 && !std::isnan(roughness_noise_factor),
+               "depth.roughness_noise_factor {} must be > 0", roughness_noise_factor);
+  UNSEEN_CHECK(occluder_slope_px >= 0.0 && std::isfinite(occluder_slope_px),
+               "depth.occluder_slope_px {} must be >= 0", occluder_slope_px);
   UNSEEN_CHECK(agree_distance_m > 0.0 && std::isfinite(agree_distance_m),
                "depth.agree_distance_m {} must be > 0", agree_distance_m);
   UNSEEN_CHECK(0.0 <= bad_agreement && bad_agreement < good_agreement && good_agreement <= 1.0,
@@ -45,6 +49,63 @@ double DepthCounts::Agreement(const DepthModalityOptions& options) const {
   if (double(hidden) > options.max_hidden_share * double(measured)) return 0.0;
   return double(agreeing) / double(measured - hidden);
 }
+
+namespace {
+
+// A sampled rendered pixel and the measured point it is paired with.
+struct DepthPair {
+  int x, y;     // rendered pixel (roi)
+  int mx, my;   // measured pixel (full resolution)
+  float z, zm;  // rendered and measured depth, metres
+  double dz;    // zm - z
+  float slope;  // rendered depth change per full-resolution pixel, metres
+};
+
+// 1.4826 times the median of `values` (a robust standard deviation); reorders them.
+double RobustSigma(std::vector<float>* values) {
+  auto middle = values->begin() + values->size() / 2;
+  std::nth_element(values->begin(), middle, values->end());
+  return 1.4826 * double(*middle);
+}
+
+// How much nearer than the rendered surface a measured one must be to be an occluder,
+// metres (before the slope term); 0: off. At least occluder_margin_m, and
+// occluder_margin_sigmas times the sensor's noise, taken as the pairs' robust spread within
+// the gate, capped at roughness_noise_factor times the measured surface's roughness between
+// neighbouring pixels: the spread counts the pose's error and any occluder too (a hand
+// covering half of a box's face spread it to 6 mm, and the margin grew past the hand),
+// the roughness sees the sensor's noise alone (on object and occluder alike), but only the
+// part of it that is independent from pixel to pixel.
+double OccluderMargin(const std::vector<DepthPair>& pairs, double gate, const cv::Mat& measured,
+                      const DepthModalityOptions& options) {
+  if (options.occluder_margin_m <= 0.0) return 0.0;
+  thread_local std::vector<float> values;
+  values.clear();
+  for (const DepthPair& pair : pairs) {
+    if (std::abs(pair.dz) <= gate) values.push_back(float(pair.dz));
+  }
+  if (values.size() < 10) return options.occluder_margin_m;
+  auto middle = values.begin() + values.size() / 2;
+  std::nth_element(values.begin(), middle, values.end());
+  const float median = *middle;
+  for (float& v : values) v = std::abs(v - median);
+  double sigma = RobustSigma(&values);
+  // Second differences of three neighbouring pixels: sqrt(6) times the noise.
+  values.clear();
+  for (const DepthPair& pair : pairs) {
+    if (pair.mx < 1 || pair.mx + 1 >= measured.cols) continue;
+    const float* row = measured.ptr<float>(pair.my);
+    const float left = row[pair.mx - 1], right = row[pair.mx + 1];
+    if (!(left > 0.0f) || !(right > 0.0f)) continue;
+    values.push_back(std::abs(left - 2.0f * pair.zm + right));
+  }
+  if (values.size() >= 10) {
+    sigma = std::min(sigma, options.roughness_noise_factor * RobustSigma(&values) / std::sqrt(6.0));
+  }
+  return std::max(options.occluder_margin_m, options.occluder_margin_sigmas * sigma);
+}
+
+}  // namespace
 
 void AddDepthEquations(const DepthModalityInput& in, const DepthModalityOptions& options,
                        FlowEquations* out, DepthCounts* counts) {
@@ -88,13 +149,7 @@ void AddDepthEquations(const DepthModalityInput& in, const DepthModalityOptions&
   };
   // 1. Association: each sampled pixel's measured point (the nearest pixel where p projects
   // at full resolution).
-  struct Pair {
-    int x, y;     // rendered pixel (roi)
-    int mx, my;   // measured pixel
-    float z, zm;  // rendered and measured depth
-    double dz;    // zm - z
-  };
-  thread_local std::vector<Pair> pairs;
+  thread_local std::vector<DepthPair> pairs;
   pairs.clear();
   for (int y = first_on_grid(in.roi.y0); y < height - 1; y += step) {
     const float* row = rendered.ptr<float>(y);
@@ -111,36 +166,35 @@ void AddDepthEquations(const DepthModalityInput& in, const DepthModalityOptions&
       const double dz = double(zm) - double(z);
       if (std::abs(dz) <= options.agree_distance_m) ++c.agreeing;
       if (dz < -options.agree_distance_m) ++c.hidden;
-      pairs.push_back({x, y, mx, my, z, zm, dz});
+      float slope = 0.0f;
+      const float zl = row[x - 1], zr = row[x + 1];
+      const float zu = rendered.ptr<float>(y - 1)[x], zd = rendered.ptr<float>(y + 1)[x];
+      if (zl > 0.0f && zr > 0.0f && zu > 0.0f && zd > 0.0f) {
+        slope = 0.5f * std::hypot(zr - zl, zd - zu) / float(1 << in.level);
+      }
+      pairs.push_back({x, y, mx, my, z, zm, dz, slope});
     }
   }
   // A measured surface in front of the rendered one is an occluder (a hand holding the
   // object): no row, unless most of the object is behind one (the pose is behind the
   // measured surface, and every row pulls it forward). The margin is at least
-  // occluder_margin_sigmas robust standard deviations of the pairs' differences: where the
-  // sensor's noise is of that size (far from it), cutting its near side only would push
-  // the object away.
-  double margin = options.occluder_margin_m;
-  if (margin > 0.0 && pairs.size() >= 10) {
-    thread_local std::vector<float> dzs;
-    dzs.clear();
-    for (const Pair& pair : pairs) dzs.push_back(float(pair.dz));
-    auto middle = dzs.begin() + dzs.size() / 2;
-    std::nth_element(dzs.begin(), middle, dzs.end());
-    const float median = *middle;
-    for (float& d : dzs) d = std::abs(d - median);
-    std::nth_element(dzs.begin(), middle, dzs.end());
-    margin = std::max(margin, options.occluder_margin_sigmas * 1.4826 * double(*middle));
-  }
-  long in_front = 0;  // measured nearer than the render by more than the margin
-  for (const Pair& pair : pairs) in_front += pair.dz < -margin;
-  const bool skip_in_front = margin > 0.0 && 2 * in_front < c.measured;
+  // occluder_margin_sigmas times the sensor's noise (where that is large, far from it,
+  // cutting its near side only would push the object away), and on a steep surface the
+  // depth it changes across occluder_slope_px pixels (what a pixel or two of misregistration
+  // makes of it, with no occluder).
+  const double margin = OccluderMargin(pairs, gate, measured, options);
+  auto in_front = [&](const DepthPair& pair) {
+    return pair.dz < -std::max(margin, options.occluder_slope_px * double(pair.slope));
+  };
+  long pairs_in_front = 0;
+  for (const DepthPair& pair : pairs) pairs_in_front += in_front(pair);
+  const bool skip_in_front = margin > 0.0 && 2 * pairs_in_front < c.measured;
   // 2. Rows.
-  for (const Pair& pair : pairs) {
+  for (const DepthPair& pair : pairs) {
     const int x = pair.x, y = pair.y;
     const float z = pair.z;
     if (std::abs(pair.dz) > gate) continue;
-    if (skip_in_front && pair.dz < -margin) continue;
+    if (skip_in_front && in_front(pair)) continue;
     // Normal from central differences of the rendered surface.
     const float* row = rendered.ptr<float>(y);
     const float zl = row[x - 1], zr = row[x + 1];

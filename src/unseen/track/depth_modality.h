@@ -34,15 +34,26 @@ struct DepthModalityOptions {
   // the measured points are (the pose is behind the measured surface: every row pulls it
   // forward); 0: off. Kept within the gate, a finger lying across a box's face pulled the
   // face towards itself and turned the box 25 deg at the first frame (held-out
-  // box_held_fingers, 18.3 -> 100 %); at 10 mm the real cube's frames that sit a little
-  // tilted lost the rows that level them (one frame lost, 2.53 -> 2.73 deg), at 15 mm
-  // 11.37 mm / 2.53 deg -> 11.28 / 2.52.
-  double occluder_margin_m = 0.015;
-  // ... and at least this many robust standard deviations of the pairs' depth differences:
-  // far from the sensor, whose noise is then of that size, a fixed margin cut the noise's
-  // near side only and pushed the object away (held-out box at 1.7 m, 17 mm of noise:
-  // 78 -> 70 %, 4.2 -> 10.4 mm).
+  // box_held_fingers, 18.3 -> 100 %); a whole hand's fingers (16-18 mm thick, over half
+  // of the face: box_held_hand) lie 9-18 mm in front, and at 15 mm the box settled 19 deg
+  // turned into them (0 -> 100 % at 8 mm, with the two terms below).
+  double occluder_margin_m = 0.008;
+  // ... and at least this many times the sensor's noise: far from the sensor, where the
+  // noise is of that size, a fixed margin cut the noise's near side only and pushed the
+  // object away (held-out box at 1.7 m, 17 mm of noise: 78 -> 70 %). The noise is the
+  // pairs' robust spread, at most roughness_noise_factor times the measured surface's
+  // roughness between neighbouring pixels: the spread also counts the pose's error and the
+  // occluder itself (over half of a face in front, it raised the margin past the hand),
+  // the roughness only the sensor's noise independent from pixel to pixel (about half of
+  // it on the renders' sensor model, whose noise is half spatially correlated).
   double occluder_margin_sigmas = 3.0;
+  double roughness_noise_factor = 3.0;
+  // ... and at least the rendered depth's change across this many pixels: on a steep or
+  // grazing surface (a cube's top face seen from the front) a pixel or two of
+  // misregistration between the depth and the colour image, or of the pose, measures the
+  // surface that much nearer with no occluder (the real cube: those rows level it;
+  // without, at an 8 mm margin, 4.83 -> 5.12 mm, 2.42 -> 2.65 deg on its trusted frames).
+  double occluder_slope_px = 4.0;
   // Robust kernel, scales and weight against the other modalities; residuals in metres.
   // The weight makes up for the photometric rows' count: thousands of pixels whose errors
   // are correlated (the blur spreads one edge over several) would otherwise outvote a few

@@ -414,7 +414,7 @@ TEST_F(ModalityScene, DepthJudgesWhereTheSilhouettesColoursCannot) {
 // The flat cube rendered at CubePose() in one camera, and the depth modality's input for a
 // measured depth image of it.
 struct DepthScene {
-  DepthScene() {
+  explicit DepthScene(const Rigid3d& pose = CubePose()) : cam_from_obj(pose) {
     RenderOptions options;
     options.write_color = false;
     Render(cube, rig.cameras[0].intrinsics, cam_from_obj, roi, options, &rendered);
@@ -432,7 +432,7 @@ struct DepthScene {
   }
   Rig rig = testing::OneCameraRig();
   Mesh cube = testing::FlatCube();
-  Rigid3d cam_from_obj = CubePose();
+  Rigid3d cam_from_obj;
   PixelRect roi{150, 50, 370, 210};
   RenderBuffers rendered;
 };
@@ -487,6 +487,73 @@ TEST(DepthModality, ASurfaceInFrontGivesNoRowsUnlessMostOfTheObjectIsBehindOne) 
   EXPECT_THROW(ParseTrackerOptions("depth: {occluder_margin_m: -0.01}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("depth: {occluder_margin_sigmas: -1}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("depth: {occluder_margin_sigmas: .nan}\n"), Error);
+}
+
+TEST(DepthModality, AHandOverNearlyHalfTheObjectIsStillAnOccluder) {
+  // A hand over 48 % of the object, 11 mm in front of it (fingers lying across its faces),
+  // and the sensor's noise (1 mm, independent from pixel to pixel). The hand spreads the
+  // pairs' depth differences far beyond the noise; taken for noise, that spread raises the
+  // occluder margin past the hand and keeps its rows, which pull the object towards it.
+  // The measured surface's roughness between neighbouring pixels sees the noise alone.
+  const DepthScene scene;
+  cv::Mat measured = scene.TrueDepth();
+  cv::Mat noise(measured.size(), CV_32F);
+  cv::RNG rng(7);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, 0.001);
+  cv::add(measured, noise, measured, measured > 0.0f);
+  const cv::Mat on_object = scene.rendered.depth > 0.0f;
+  const int object_px = cv::countNonZero(on_object);
+  int hand_rows = 0;
+  for (int covered = 0; covered < 0.48 * object_px; ++hand_rows) {
+    covered += cv::countNonZero(on_object.row(hand_rows));
+  }
+  measured(cv::Rect(0, scene.roi.y0, measured.cols, hand_rows)) -= 0.011f;
+  auto rows = [&](const DepthModalityOptions& options, DepthCounts* counts) {
+    FlowEquations eq;
+    AddDepthEquations(scene.Input(&measured), options, &eq, counts);
+    double pull = 0.0;  // mean right-hand side: > 0 pulls the object towards the camera
+    for (int i = 0; i < eq.size(); ++i) pull += eq.rhs[i];
+    return std::make_pair(eq.size(), pull / std::max(1, eq.size()));
+  };
+  DepthCounts counts, spread_counts;
+  const auto [kept, pull] = rows(DepthModalityOptions(), &counts);
+  EXPECT_GT(counts.hidden, 0.35 * counts.measured);
+  EXPECT_LT(2 * counts.hidden, counts.measured);
+  DepthModalityOptions spread_only;
+  spread_only.roughness_noise_factor = 1e6;
+  const auto [spread_kept, spread_pull] = rows(spread_only, &spread_counts);
+  EXPECT_GT(spread_kept, kept + 150) << "the spread alone keeps the hand's rows";
+  EXPECT_GT(spread_pull, 0.002);
+  EXPECT_LT(pull, 0.001) << "without them, little pull towards the hand";
+  EXPECT_GT(kept, 300);
+  EXPECT_THROW(ParseTrackerOptions("depth: {roughness_noise_factor: 0}\n"), Error);
+}
+
+TEST(DepthModality, ASteepSurfaceMeasuredPixelsOffKeepsItsRows) {
+  // The cube turned so that one face is seen at 69 deg, its depth image registered 3 px off
+  // the colour camera, nothing in front: on the steep face the measured surface lies more
+  // than the occluder margin nearer than the rendered one at the same pixel. Those pairs
+  // are no occluder: the margin grows with the rendered slope.
+  const DepthScene scene(Rigid3d(ExpSO3(Eigen::Vector3d(0.2, 1.2, 0.0)), CubePose().translation()));
+  const cv::Mat truth = scene.TrueDepth();
+  cv::Mat measured(truth.size(), CV_32F, cv::Scalar(0.0f));
+  const int shift = 3;
+  truth(cv::Rect(shift, 0, truth.cols - shift, truth.rows))
+      .copyTo(measured(cv::Rect(0, 0, truth.cols - shift, truth.rows)));
+  auto rows = [&](double slope_px, DepthCounts* counts) {
+    DepthModalityOptions options;
+    options.occluder_slope_px = slope_px;
+    FlowEquations eq;
+    AddDepthEquations(scene.Input(&measured), options, &eq, counts);
+    return eq.size();
+  };
+  DepthCounts counts, flat_counts;
+  const int kept = rows(DepthModalityOptions().occluder_slope_px, &counts);
+  const int kept_flat = rows(0.0, &flat_counts);
+  EXPECT_GT(counts.hidden, 30);
+  EXPECT_GT(kept, kept_flat + 50) << "the steep face's rows are kept";
+  EXPECT_GT(kept, 0.85 * counts.measured);
+  EXPECT_THROW(ParseTrackerOptions("depth: {occluder_slope_px: -1}\n"), Error);
 }
 
 TEST(RegionModality, HistogramsLearnAndJudgeColours) {

@@ -340,6 +340,8 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"max_distance_m", YamlField(&de.max_distance_m)},
         {"occluder_margin_m", YamlField(&de.occluder_margin_m)},
         {"occluder_margin_sigmas", YamlField(&de.occluder_margin_sigmas)},
+        {"roughness_noise_factor", YamlField(&de.roughness_noise_factor)},
+        {"occluder_slope_px", YamlField(&de.occluder_slope_px)},
         {"kernel", YamlEnumField(&de.residual.kernel, &ParseRobustKernel)},
         {"kernel_width", YamlField(&de.residual.kernel_width)},
         {"min_scale_m", YamlField(&de.residual.min_scale)},
