@@ -634,9 +634,11 @@ TrackResult Reacquisition::Seed(const Frame& frame, const Rigid3d& predicted, Tr
   if (!o.use_correlation) return first;
   StageTimes times = first.summary.times;
   Timer timer;
+  ReacquisitionOptions seeding = o;  // the object is near where its motion put it
+  seeding.search_radii = o.seed_search_radii;
   const std::vector<CorrelationSeed> seeds =
       FindCorrelationSeeds(images, tracker_.rig(), tracker_.model(), sphere_centre_,
-                           sphere_radius_, predicted, o, options.preprocess);
+                           sphere_radius_, predicted, seeding, options.preprocess);
   times.preprocess_ms += timer.ElapsedMilliseconds();
   TrackResult best = std::move(first);
   if (!seeds.empty() && seeds[0].max_shift_px >= o.min_seed_shift_px) {

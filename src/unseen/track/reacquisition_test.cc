@@ -285,6 +285,29 @@ TEST_F(Reacquire, AJumpBeyondThePyramidsReachIsReacquired) {
   EXPECT_EQ(TrackUntilHeld(&without, poses, 4), -1);
 }
 
+TEST_F(Reacquire, WhileTrackingALookAlikeBeyondTheSeedsWindowIsNoJump) {
+  // The cube tracked at CubePose(), then gone, and an identical cube 3 of its bounding
+  // sphere's radii to the right: where the object cannot have moved between two frames.
+  // The doubtful frame's correlation seed looks only seed_search_radii around the
+  // prediction; with the lost search's wider window it finds the look-alike and jumps.
+  const Rigid3d twin(CubePose().rotation(),
+                     CubePose().translation() + Eigen::Vector3d(3.0 * radius_, 0.0, 0.0));
+  auto frame_after = [&](const TrackerOptions& options) {
+    Tracker tracker(rig_, cube_, options);
+    tracker.Initialize(CubePose());
+    for (int k = 0; k < 3; ++k) tracker.Track({Image(CubePose())});
+    return tracker.Track({Image(twin)});
+  };
+  const TrackResult held = frame_after(TrackerOptions());
+  EXPECT_GT(Difference(held.world_from_obj, twin).translation, radius_) << held.BriefReport();
+  EXPECT_LT(held.confidence, TrackerOptions().failure.recover_confidence) << held.BriefReport();
+  TrackerOptions wide;
+  wide.reacquisition.seed_search_radii = wide.reacquisition.search_radii;
+  const TrackResult jumped = frame_after(wide);
+  EXPECT_LT(Difference(jumped.world_from_obj, twin).translation, 0.01) << jumped.BriefReport();
+  EXPECT_THROW(ParseTrackerOptions("reacquisition: {seed_search_radii: 0}\n"), Error);
+}
+
 TEST_F(Reacquire, AJumpWithARotationIsReacquiredByTheRotationCandidates) {
   // The jump and a turn of 40 degrees about the optical axis, or 30 about the horizontal.
   for (const Eigen::Vector3d& turn :

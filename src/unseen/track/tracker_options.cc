@@ -125,6 +125,8 @@ void ReacquisitionOptions::Check() const {
                "reacquisition.seed_object_px {} must be >= 8", seed_object_px);
   UNSEEN_CHECK(search_radii > 0.0 && search_radii <= 20.0,
                "reacquisition.search_radii {} must be in (0, 20]", search_radii);
+  UNSEEN_CHECK(seed_search_radii > 0.0 && seed_search_radii <= 20.0,
+               "reacquisition.seed_search_radii {} must be in (0, 20]", seed_search_radii);
   UNSEEN_CHECK(min_correlation >= -1.0 && min_correlation <= 1.0,
                "reacquisition.min_correlation {} must be in [-1, 1]", min_correlation);
   UNSEEN_CHECK(max_seeds >= 1 && max_seeds <= 8, "reacquisition.max_seeds {} must be in [1, 8]",
@@ -319,6 +321,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
        {{"use_correlation", YamlField(&re.use_correlation)},
         {"seed_object_px", YamlField(&re.seed_object_px)},
         {"search_radii", YamlField(&re.search_radii)},
+        {"seed_search_radii", YamlField(&re.seed_search_radii)},
         {"min_correlation", YamlField(&re.min_correlation)},
         {"max_seeds", YamlField(&re.max_seeds)},
         {"rotation_deg", YamlField(&re.rotation_deg)},
