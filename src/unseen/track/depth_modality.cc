@@ -61,13 +61,6 @@ struct DepthPair {
   float slope;  // rendered depth change per full-resolution pixel, metres
 };
 
-// 1.4826 times the median of `values` (a robust standard deviation); reorders them.
-double RobustSigma(std::vector<float>* values) {
-  auto middle = values->begin() + values->size() / 2;
-  std::nth_element(values->begin(), middle, values->end());
-  return 1.4826 * double(*middle);
-}
-
 // How much nearer than the rendered surface a measured one must be to be an occluder,
 // metres (before the slope term); 0: off. At least occluder_margin_m, and
 // occluder_margin_sigmas times the sensor's noise, taken as the pairs' robust spread within

@@ -137,8 +137,6 @@ double ModalityEquations::TrimmedRms(double share) const {
   return std::sqrt(sum / kept);
 }
 
-namespace {
-
 // 1.4826 times the median of the values (a robust standard deviation), from an even spread of
 // at most 1 024 of them: the scale needs a few per cent accuracy, and the selection is the
 // solve's costliest part. Reorders `values`.
@@ -152,6 +150,8 @@ double RobustSigma(std::vector<float>* values) {
   std::nth_element(values->begin(), values->begin() + mid, values->begin() + kept);
   return 1.4826 * (*values)[mid];
 }
+
+namespace {
 
 // The per-modality working state of the solve.
 struct ModalityWork {

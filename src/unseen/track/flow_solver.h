@@ -119,6 +119,10 @@ struct FlowSolution {
 // the kernel of `options`.
 FlowSolution SolveFlow(const std::vector<FlowEquations>& cameras, const FlowSolverOptions& options);
 
+// 1.4826 times the median of `values` (a robust standard deviation), from an even spread of
+// at most 1 024 of them; 0 for none. Reorders `values`.
+double RobustSigma(std::vector<float>* values);
+
 // One Gauss-Newton step over several modalities: each modality's normal equations, re-weighted
 // by its own kernel and scale, weighed by weight / noise^2 (ResidualModel) and summed over
 // modalities and cameras. `options` gives irls_iterations, min_equations (over all
