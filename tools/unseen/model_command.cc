@@ -108,10 +108,11 @@ void RunModel(const ModelArgs& args) {
       ToString(options.depth.source).c_str(), build.depth_ms, build.mesh_ms, args.out.c_str());
   std::printf(
       "  segmentation: region %d px, depth %d, on plane %d (found %d), beyond radius %d, "
-      "unconnected %d, dense %d\n",
+      "unconnected %d, dense %d%s\n",
       build.segmentation.region_pixels, build.segmentation.with_depth, build.segmentation.on_plane,
       int(build.segmentation.plane_found), build.segmentation.beyond_radius,
-      build.segmentation.unconnected, int(build.segmentation.dense));
+      build.segmentation.unconnected, int(build.segmentation.dense),
+      build.segmentation.fragmented ? " (dense depth in islands: joined as sparse)" : "");
   std::printf("  object frame (track --init): %.6f,%.6f,%.6f,%.8f,%.8f,%.8f,%.8f\n", t.x(), t.y(),
               t.z(), q.x(), q.y(), q.z(), q.w());
 }

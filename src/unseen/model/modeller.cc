@@ -104,9 +104,10 @@ ModelBuild Modeller::Build(const Frame& frame, const Rigid3d& world_from_obj,
     const SegmentationReport& sr = out.segmentation;
     UNSEEN_LOG_DEBUG(
         "modeller: segmentation of {} region pixels: {} with depth, {} on the support plane "
-        "(found {}), {} beyond the radius, {} unconnected; {} on the object",
+        "(found {}), {} beyond the radius, {} unconnected{}; {} on the object",
         sr.region_pixels, sr.with_depth, sr.on_plane, sr.plane_found, sr.beyond_radius,
-        sr.unconnected, cv::countNonZero(out.mask));
+        sr.unconnected, sr.fragmented ? " (dense depth in islands: joined as sparse)" : "",
+        cv::countNonZero(out.mask));
   }
   const cv::Mat image = frame.images[reference_].type() == CV_32FC3
                             ? frame.images[reference_]

@@ -102,6 +102,8 @@ void SegmentationOptions::Check() const {
                "segmentation.dense_share {} must be in [0, 1]", dense_share);
   UNSEEN_CHECK(min_component_share >= 0.0 && min_component_share <= 1.0,
                "segmentation.min_component_share {} must be in [0, 1]", min_component_share);
+  UNSEEN_CHECK(min_connected_share >= 0.0 && min_connected_share <= 1.0,
+               "segmentation.min_connected_share {} must be in [0, 1]", min_connected_share);
 }
 
 void SurfaceMeshOptions::Check() const {
@@ -234,6 +236,7 @@ ModellerOptions FromYaml(const YAML::Node& root, const std::string& what, Modell
         {"max_depth_step", YamlField(&sg.max_depth_step)},
         {"dense_share", YamlField(&sg.dense_share)},
         {"min_component_share", YamlField(&sg.min_component_share)},
+        {"min_connected_share", YamlField(&sg.min_connected_share)},
         {"sparse_gap_px", YamlField(&sg.sparse_gap_px)},
         {"sparse_fill_px", YamlField(&sg.sparse_fill_px)}}},
       {"mesh",

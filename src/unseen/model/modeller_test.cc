@@ -297,6 +297,35 @@ TEST_F(ModellerScene, SegmentationIgnoresASensorsIslandNearerTheOriginThanTheFac
             0.1);
 }
 
+TEST_F(ModellerScene, ASensorsDepthThinnedToScatteredPixelsStillGivesTheObject) {
+  const RigScene& s = *scene_;
+  DepthMap map;
+  map.depth = s.frame.depths[0].clone();
+  map.dense = true;
+  const PinholeCamera& camera = s.rig.cameras[0].intrinsics;
+  const Eigen::Vector3d origin =
+      (s.rig.cameras[0].cam_from_world() * s.world_from_obj).translation();
+  // A sensor far from the object, or a dark one: three pixels of four lost, at random, so
+  // that the measured ones touch one another only here and there.
+  cv::Mat keep(map.depth.size(), CV_32FC1);
+  cv::RNG rng(7);
+  rng.fill(keep, cv::RNG::UNIFORM, 0.0, 1.0);
+  map.depth.setTo(0.0f, keep > 0.25f);
+  SegmentationOptions options;
+  options.remove_support_plane = false;
+  const PixelRect region = ObjectRegion(40);
+  SegmentationReport report;
+  const cv::Mat mask = SegmentObject(map, camera, region, origin, cv::Mat(), options, &report);
+  EXPECT_TRUE(report.fragmented);
+  EXPECT_FALSE(report.dense);
+  EXPECT_GT(Iou(mask, s.object_masks[0]), 0.8);
+  // Taken as dense (its pixels connected to their eight neighbours only), one island.
+  options.min_connected_share = 0.0;
+  const cv::Mat islands = SegmentObject(map, camera, region, origin, cv::Mat(), options, &report);
+  EXPECT_FALSE(report.fragmented);
+  EXPECT_LT(cv::countNonZero(islands), 0.1 * cv::countNonZero(s.object_masks[0]));
+}
+
 // The blocks that moved with an untextured object lie along its outline, inside and out:
 // with a depth sensor they pick the object's surface, which the depth then segments whole,
 // and place the object frame at the nearer of the two surfaces they hold.

@@ -279,10 +279,6 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
       rep.support_plane << side * support->normal, side * support->offset;
     }
   }
-  // Where the depth is dense, the pixels without depth are not the object's either.
-  if (rep.dense) {
-    out_region.setTo(0, depth_region <= 0.0f);
-  }
   const PlaneTest on_plane(options);
   for (size_t i = 0; i < points.size(); ++i) {
     const cv::Point& px = pixels[i];
@@ -300,14 +296,21 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
   // The measured pixels connected in depth: neighbours (dense depth: the 8 around a pixel;
   // sparse depth, which image-based sources measure on textured pixels only: any within
   // sparse_gap_px) whose depths differ by less than max_depth_step of the depth.
-  const DepthComponents parts = LabelDepthComponents(
-      depth_map, camera, r, out, pixels, origin_in_cam, rep.dense ? 1 : options.sparse_gap_px,
-      options.max_depth_step);
-  if (parts.count.size() == 1) return out;  // no measured pixel left
-  int best_label = 0;
-  std::vector<int> masked(parts.count.size(), 0);
+  auto label = [&](bool dense) {
+    return LabelDepthComponents(depth_map, camera, r, out, pixels, origin_in_cam,
+                                dense ? 1 : options.sparse_gap_px, options.max_depth_step);
+  };
+  DepthComponents parts = label(rep.dense);
+  if (parts.count.size() == 1) {  // no measured pixel left
+    if (rep.dense) out_region.setTo(0, depth_region <= 0.0f);
+    return out;
+  }
+  std::vector<int> masked;
   int total_masked = 0;
-  if (mask_selects) {
+  auto count_masked = [&] {
+    masked.assign(parts.count.size(), 0);
+    total_masked = 0;
+    if (!mask_selects) return;
     const cv::Mat mask_region = given_mask(rect);
     for (int y = 0; y < rect.height; ++y) {
       const int* label_row = parts.labels.ptr<int>(y);
@@ -317,31 +320,33 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
       }
     }
     total_masked = std::accumulate(masked.begin(), masked.end(), 0);
-  }
+  };
+  count_masked();
   // Whether component k holds enough of a selecting mask's measured pixels to be the object.
   auto selected = [&](size_t k) {
     return masked[k] > 0 && masked[k] >= options.min_component_share * total_masked;
   };
-  if (rep.dense) {
-    // Dense depth: with a selecting mask, a surface holding the mask's measured pixels
-    // (below). Else the component nearest the origin, among those that hold at least
-    // min_component_share of the measured pixels within the radius: a sensor's noise,
-    // holes and lost pixels along depth steps leave fragments (a thin part, a pixel
-    // island) that may come nearer the origin, inside the object, than its visible face.
-    // Without such a component, the nearest of all.
+  // Dense depth: with a selecting mask, of the surfaces holding the mask's measured pixels
+  // the nearest the origin (the blocks along a moving object's outline hold the
+  // background's side too). Else the component nearest the origin, among those that hold
+  // at least min_component_share of the measured pixels within the radius: a sensor's
+  // noise, holes and lost pixels along depth steps leave fragments (a thin part, a pixel
+  // island) that may come nearer the origin, inside the object, than its visible face.
+  // Without such a component (also when a selecting mask lies on no surface), the nearest
+  // of all.
+  const int within = static_cast<int>(points.size()) - rep.beyond_radius;
+  const double min_count = options.min_component_share * within;
+  auto nearest_surface = [&] {
+    int best = 0;
     if (mask_selects) {
-      // Of the surfaces it selects, the nearest the origin (the blocks along a moving
-      // object's outline hold the background's side too).
       double best_d = std::numeric_limits<double>::infinity();
       for (size_t k = 1; k < masked.size(); ++k) {
         if (selected(k) && parts.nearest_m[k] < best_d) {
           best_d = parts.nearest_m[k];
-          best_label = static_cast<int>(k);
+          best = static_cast<int>(k);
         }
       }
     }
-    const int within = static_cast<int>(points.size()) - rep.beyond_radius;
-    const double min_count = options.min_component_share * within;
     double near_d = std::numeric_limits<double>::infinity(), any_d = near_d;
     int near_label = 0, any_label = 0;
     for (size_t k = 1; k < parts.count.size(); ++k) {
@@ -349,9 +354,33 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
       if (d < any_d) any_d = d, any_label = static_cast<int>(k);
       if (parts.count[k] >= min_count && d < near_d) near_d = d, near_label = static_cast<int>(k);
     }
-    // (Also when a selecting mask lies on no surface.)
-    if (best_label == 0) best_label = near_label > 0 ? near_label : any_label;
-    if (best_label == 0) return out;
+    if (best == 0) best = near_label > 0 ? near_label : any_label;
+    return best;
+  };
+  int best_label = 0;
+  if (rep.dense) {
+    // A dense map that measures the object only in scattered pixels (a sensor's far range:
+    // noise and the pixels lost along its steps thin it out) falls apart into islands of a
+    // few pixels: then its pixels connect across gaps as sparse depth's do.
+    int in_surfaces = 0;  // measured pixels in components of at least min_count
+    for (size_t k = 1; k < parts.count.size(); ++k) {
+      if (parts.count[k] >= min_count) in_surfaces += parts.count[k];
+    }
+    if (in_surfaces < options.min_connected_share * before) {
+      rep.dense = false;
+      rep.fragmented = true;
+      parts = label(false);
+      count_masked();
+    } else {
+      best_label = nearest_surface();
+    }
+  }
+  if (rep.dense) {
+    // Where the depth is dense, the pixels without depth are not the object's either.
+    if (best_label == 0) {
+      out_region.setTo(0, depth_region <= 0.0f);
+      return out;
+    }
     out_region &= parts.labels == best_label;
     rep.unconnected = before - parts.count[best_label];
     return out;
@@ -372,7 +401,7 @@ cv::Mat SegmentObject(const DepthMap& depth_map, const PinholeCamera& camera,
     }
     return label;
   };
-  if (mask_selects) best_label = largest_near(true);
+  best_label = mask_selects ? largest_near(true) : 0;
   if (best_label == 0) best_label = largest_near(false);
   if (best_label == 0) {
     out_region.setTo(0);

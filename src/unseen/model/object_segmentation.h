@@ -37,6 +37,12 @@ struct SegmentationOptions {
   // noise and lost pixels leave small islands, which may lie nearer the origin), or of a
   // selecting mask's (MaskRole::kSelects).
   double min_component_share = 0.05;
+  // Dense depth whose surfaces (components of at least min_component_share, as above) hold
+  // less than this share of the measured pixels left (within the radius, off the plane)
+  // measures the object only in scattered pixels (a sensor far from it, a dark object:
+  // noise and lost pixels thin it out into islands): its pixels then connect across gaps
+  // as sparse depth's do.
+  double min_connected_share = 0.3;
   // Sparse depth: measured pixels connect across gaps of up to this many pixels, and the
   // object's area reaches this far around them.
   int sparse_gap_px = 8;
@@ -47,6 +53,7 @@ struct SegmentationOptions {
 struct SegmentationReport {
   int region_pixels = 0, with_depth = 0, on_plane = 0, beyond_radius = 0, unconnected = 0;
   bool plane_found = false, dense = false;
+  bool fragmented = false;  // dense depth taken as sparse (min_connected_share)
   // When plane_found: the support plane in the camera frame, (n, d) with n.p + d = 0, |n|
   // = 1, the object frame's origin on the positive side.
   Eigen::Vector4d support_plane = Eigen::Vector4d::Zero();
