@@ -41,6 +41,17 @@ class ModellerScene : public ::testing::TestWithParam<DepthSourceKind> {
     const cv::Rect box = cv::boundingRect(scene_->object_masks[0]);
     return PixelRect{box.x, box.y, box.x + box.width, box.y + box.height}.Grow(margin);
   }
+  // The first camera's sensor depth (dense), that camera and the object's origin in it.
+  static DepthMap SensorDepth() {
+    DepthMap map;
+    map.depth = scene_->frame.depths[0].clone();
+    map.dense = true;
+    return map;
+  }
+  static const PinholeCamera& Camera() { return scene_->rig.cameras[0].intrinsics; }
+  static Eigen::Vector3d OriginInCamera() {
+    return (scene_->rig.cameras[0].cam_from_world() * scene_->world_from_obj).translation();
+  }
   static RigScene* scene_;
 };
 RigScene* ModellerScene::scene_ = nullptr;
@@ -235,12 +246,9 @@ TEST_F(ModellerScene, SegmentationKeepsALargeFlatSideOfTheObject) {
 
 TEST_F(ModellerScene, SegmentationSeparatesTheObjectFromTheWallBehindIt) {
   const RigScene& s = *scene_;
-  DepthMap map;
-  map.depth = s.frame.depths[0];
-  map.dense = true;
-  const PinholeCamera& camera = s.rig.cameras[0].intrinsics;
-  const Eigen::Vector3d origin =
-      (s.rig.cameras[0].cam_from_world() * s.world_from_obj).translation();
+  DepthMap map = SensorDepth();
+  const PinholeCamera& camera = Camera();
+  const Eigen::Vector3d origin = OriginInCamera();
   // A radius that takes in the wall, and no plane removal: the wall is not connected to the
   // object in depth.
   SegmentationOptions options;
@@ -257,12 +265,9 @@ TEST_F(ModellerScene, SegmentationSeparatesTheObjectFromTheWallBehindIt) {
 
 TEST_F(ModellerScene, SegmentationIgnoresASensorsIslandNearerTheOriginThanTheFace) {
   const RigScene& s = *scene_;
-  DepthMap map;
-  map.depth = s.frame.depths[0].clone();
-  map.dense = true;
-  const PinholeCamera& camera = s.rig.cameras[0].intrinsics;
-  const Eigen::Vector3d origin =
-      (s.rig.cameras[0].cam_from_world() * s.world_from_obj).translation();
+  DepthMap map = SensorDepth();
+  const PinholeCamera& camera = Camera();
+  const Eigen::Vector3d origin = OriginInCamera();
   // Amid the object's face, a two-pixel island measured at the object's centre, centimetres
   // behind the face (a thin part seen through a gap, or a sensor's stray measurement): not
   // connected to the face in depth, and nearer the origin than any of the face's points.
@@ -299,12 +304,9 @@ TEST_F(ModellerScene, SegmentationIgnoresASensorsIslandNearerTheOriginThanTheFac
 
 TEST_F(ModellerScene, ASensorsDepthThinnedToScatteredPixelsStillGivesTheObject) {
   const RigScene& s = *scene_;
-  DepthMap map;
-  map.depth = s.frame.depths[0].clone();
-  map.dense = true;
-  const PinholeCamera& camera = s.rig.cameras[0].intrinsics;
-  const Eigen::Vector3d origin =
-      (s.rig.cameras[0].cam_from_world() * s.world_from_obj).translation();
+  DepthMap map = SensorDepth();
+  const PinholeCamera& camera = Camera();
+  const Eigen::Vector3d origin = OriginInCamera();
   // A sensor far from the object, or a dark one: three pixels of four lost, at random, so
   // that the measured ones touch one another only here and there.
   cv::Mat keep(map.depth.size(), CV_32FC1);
