@@ -126,6 +126,9 @@ RunOutcome Execute(const Run& run, int max_frames) {
   Mesh model = run.model ? run.model(sequence) : sequence.LoadModel();
   TrackerOptions options = run.options;
   options.threads = run.threads;
+  // The predictor's time step is the sequence's frame interval, as `unseen track` sets it
+  // (a 10 fps sequence was predicted as if at 30 fps).
+  if (sequence.fps() > 0) options.frame_interval_s = 1.0 / sequence.fps();
   Tracker tracker(sequence.rig(), std::move(model), options);
   const auto start = sequence.GroundTruth(0);
   UNSEEN_CHECK(start.has_value(), "{}: frame 0 has no ground truth", run.sequence_dir);
