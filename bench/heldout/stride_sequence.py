@@ -14,8 +14,11 @@ import sys
 
 
 def load(path):
-    with open(path) as f:
-        return json.load(f)
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError) as e:
+        sys.exit(f'{path}: cannot read it as JSON ({e})')
 
 
 def save(path, data):

@@ -112,7 +112,7 @@ void RunModel(const ModelArgs& args) {
       build.segmentation.region_pixels, build.segmentation.with_depth, build.segmentation.on_plane,
       int(build.segmentation.plane_found), build.segmentation.beyond_radius,
       build.segmentation.unconnected, int(build.segmentation.dense),
-      build.segmentation.fragmented ? " (dense depth in islands: joined as sparse)" : "");
+      build.segmentation.FragmentedNote());
   std::printf("  object frame (track --init): %.6f,%.6f,%.6f,%.8f,%.8f,%.8f,%.8f\n", t.x(), t.y(),
               t.z(), q.x(), q.y(), q.z(), q.w());
 }

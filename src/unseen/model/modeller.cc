@@ -106,7 +106,7 @@ ModelBuild Modeller::Build(const Frame& frame, const Rigid3d& world_from_obj,
         "modeller: segmentation of {} region pixels: {} with depth, {} on the support plane "
         "(found {}), {} beyond the radius, {} unconnected{}; {} on the object",
         sr.region_pixels, sr.with_depth, sr.on_plane, sr.plane_found, sr.beyond_radius,
-        sr.unconnected, sr.fragmented ? " (dense depth in islands: joined as sparse)" : "",
+        sr.unconnected, sr.FragmentedNote(),
         cv::countNonZero(out.mask));
   }
   const cv::Mat image = frame.images[reference_].type() == CV_32FC3

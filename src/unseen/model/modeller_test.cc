@@ -486,6 +486,9 @@ TEST(ModellerOptionsYaml, ReadsEverySectionAndNamesWhatIsWrong) {
             std::string::npos);
   EXPECT_NE(message("segmentation: {min_component_share: 1.5}").find("min_component_share"),
             std::string::npos);
+  EXPECT_NE(message("segmentation: {min_connected_share: -0.1}")
+                .find("segmentation.min_connected_share"),
+            std::string::npos);
   EXPECT_NE(message("model: {sensor_mask_depth_quantile: -0.1}").find("sensor_mask_depth"),
             std::string::npos);
   EXPECT_THROW(LoadModellerOptions("/nonexistent/model.yaml"), Error);

@@ -54,6 +54,10 @@ struct SegmentationReport {
   int region_pixels = 0, with_depth = 0, on_plane = 0, beyond_radius = 0, unconnected = 0;
   bool plane_found = false, dense = false;
   bool fragmented = false;  // dense depth taken as sparse (min_connected_share)
+  // What a report line adds when the depth was fragmented: "" or a note saying so.
+  const char* FragmentedNote() const {
+    return fragmented ? " (dense depth in islands: joined as sparse)" : "";
+  }
   // When plane_found: the support plane in the camera frame, (n, d) with n.p + d = 0, |n|
   // = 1, the object frame's origin on the positive side.
   Eigen::Vector4d support_plane = Eigen::Vector4d::Zero();
