@@ -486,6 +486,13 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
                                  : texture_leads ? po.photometric_coarse_min_update_px
                                                  : po.coarse_min_update_px;
     Vector6d previous_update = Vector6d::Zero();  // the level's previous solve
+    // The depth rows wait for the finest level while the model's own texture leads
+    // (DepthModalityOptions::coarse_with_own_texture); a search's scoring span keeps them
+    // at its own finest level, where its confidence is measured.
+    const bool own_texture = model_ == given_model_ && model_->projectors.empty();
+    const bool depth_this_level = use_depth && (level == finest || !texture_leads ||
+                                                !own_texture ||
+                                                options_.depth.coarse_with_own_texture);
     for (int iteration = 0; iteration < max_iterations; ++iteration) {
       ++s.renders;
       const Rigid3d round_pose = pose;
@@ -549,7 +556,9 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
         const CameraWork& w = *work_[c];
         if (!w.active || !w.virtual_ok) continue;
         if (use_photometric_) jobs.push_back(kModalityJobs * c + kPhotometricJob);
-        if (use_depth && !frame.depths[c].empty()) jobs.push_back(kModalityJobs * c + kDepthJob);
+        if (depth_this_level && !frame.depths[c].empty()) {
+          jobs.push_back(kModalityJobs * c + kDepthJob);
+        }
         if (options_.region.enabled) {
           (region_waits ? later_jobs : jobs).push_back(kModalityJobs * c + kRegionJob);
         }
