@@ -346,6 +346,47 @@ TEST_F(ModalityScene, AFastMotionsCoarseLevelsFollowTheTextureNotTheDepthOffIt) 
   EXPECT_LT(e.rotation_rad, 0.3 * kDeg) << r.BriefReport();
 }
 
+TEST_F(ModalityScene, ADoubtfulFrameIsAlignedAgainWithDepthAtEveryLevel) {
+  // The object moves 30 mm between two frames and the second is smeared by a 31-px motion
+  // blur: the texture alone leads the coarse levels astray and the frame comes out doubtful;
+  // aligned again with the depth rows at every level, it is found (depth.
+  // retry_doubtful_with_coarse_depth).
+  const Mesh textured = MakeLetteredCube(0.096, 128);
+  const cv::Mat background = testing::Background(rig_.cameras[0].intrinsics, 3);
+  Vector6d d;
+  d << 0.03, -0.006, 0.004, 2 * kDeg, -4 * kDeg, 1 * kDeg;
+  const Rigid3d moved = Perturb(truth_, d);
+  auto frame_at = [&](const Rigid3d& world_from_obj, int blur_px) {
+    Frame frame;
+    cv::Mat image =
+        testing::RenderOverBackground(textured, rig_.cameras[0], world_from_obj, background);
+    if (blur_px > 1) {
+      const cv::Mat kernel = cv::Mat::ones(1, blur_px, CV_32F) / float(blur_px);
+      cv::filter2D(image, image, -1, kernel, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
+    }
+    frame.images = {image};
+    frame.depths = {DepthImage(textured, rig_.cameras[0], world_from_obj, 1.6f)};
+    return frame;
+  };
+  const Frame first = frame_at(truth_, 0), second = frame_at(moved, 31);
+  auto track_second = [&](bool retry) {
+    TrackerOptions options;
+    options.depth.retry_doubtful_with_coarse_depth = retry;
+    Tracker tracker(rig_, textured, options);
+    tracker.Initialize(truth_);
+    tracker.Track(first);
+    return tracker.Track(second);
+  };
+  const TrackResult without = track_second(false);
+  ASSERT_LT(without.confidence, ReacquisitionOptions().doubtful_confidence)
+      << "the scene no longer makes the texture-led alignment doubtful: "
+      << without.BriefReport();
+  const TrackResult r = track_second(true);
+  EXPECT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
+  EXPECT_GT(r.confidence, ReacquisitionOptions().doubtful_confidence) << r.BriefReport();
+  EXPECT_LT(Difference(r.world_from_obj, moved).translation, 0.015) << r.BriefReport();
+}
+
 TEST_F(ModalityScene, ASilhouetteOffItsContourVouchesLess) {
   // The flat cube is tracked by its silhouette; then a second cube of the same colour
   // stands right beside it. Its colours agree with the learnt statistics, but along that

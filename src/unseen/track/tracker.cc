@@ -339,6 +339,12 @@ TrackResult Tracker::Align(const Frame& frame, const Rigid3d& world_from_obj, in
   return r;
 }
 
+bool Tracker::CoarseLevelsWithoutDepth(const Frame& frame) const {
+  return !frame.depths.empty() && !options_.depth.coarse_with_own_texture &&
+         !coarse_depth_forced_ && PhotometricJudges() && !learn_from_start_ &&
+         model_ == given_model_ && model_->projectors.empty();
+}
+
 bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int level,
                             ThreadPool* render_pool, CameraWork* work) const {
   CameraWork& w = *work;
@@ -489,10 +495,8 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
     // The depth rows wait for the finest level while the model's own texture leads
     // (DepthModalityOptions::coarse_with_own_texture); a search's scoring span keeps them
     // at its own finest level, where its confidence is measured.
-    const bool own_texture = model_ == given_model_ && model_->projectors.empty();
-    const bool depth_this_level = use_depth && (level == finest || !texture_leads ||
-                                                !own_texture ||
-                                                options_.depth.coarse_with_own_texture);
+    const bool depth_this_level =
+        use_depth && (level == finest || !CoarseLevelsWithoutDepth(frame));
     for (int iteration = 0; iteration < max_iterations; ++iteration) {
       ++s.renders;
       const Rigid3d round_pose = pose;

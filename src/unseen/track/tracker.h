@@ -244,6 +244,9 @@ class Tracker {
   double RegionResidualRatio(const SolveSummary& summary) const;
   // Whether the photometric fit judges the frames (in use and not demoted).
   bool PhotometricJudges() const { return use_photometric_ && !photometric_demoted_; }
+  // Whether an alignment's coarse levels leave the depth rows out: the frame carries depth
+  // and the model's own texture leads (DepthModalityOptions::coarse_with_own_texture).
+  bool CoarseLevelsWithoutDepth(const Frame& frame) const;
   // Whether a tracked frame's alignment shows the light changed under the model's own
   // colours (PhotometricOptions::light_change_fit); `has_depth`: the frame carries depth.
   bool LightChanged(const SolveSummary& summary, bool has_depth) const;
@@ -342,6 +345,9 @@ class Tracker {
   DepthModality depth_;
   RegionModality region_;
   bool learn_from_start_ = false;  // the next Track() starts at a given pose (Initialize)
+  // Set while a doubtful frame is aligned again with the depth rows at every level
+  // (DepthModalityOptions::coarse_with_own_texture).
+  bool coarse_depth_forced_ = false;
 
   bool initialized_ = false;
   TrackStatus status_ = TrackStatus::kTracking;

@@ -106,7 +106,8 @@ TEST(TrackerOptions, ParsesTheReacquisitionSection) {
 TEST(TrackerOptions, ParsesTheModalitySections) {
   const TrackerOptions o = ParseTrackerOptions(
       "region: {weight: 0.7, max_noise: 1.5}\n"
-      "depth: {max_noise_m: 0.01, coarse_with_own_texture: true}\n"
+      "depth: {max_noise_m: 0.01, coarse_with_own_texture: true, "
+      "retry_doubtful_with_coarse_depth: false}\n"
       "live_appearance: {enabled: true, always: true, refresh_frames: 3, "
       "photometric_weight: 0.2}\n");
   EXPECT_DOUBLE_EQ(o.region.residual.weight, 0.7);
@@ -114,6 +115,8 @@ TEST(TrackerOptions, ParsesTheModalitySections) {
   EXPECT_DOUBLE_EQ(o.depth.residual.max_noise, 0.01);
   EXPECT_TRUE(o.depth.coarse_with_own_texture);
   EXPECT_FALSE(ParseTrackerOptions("").depth.coarse_with_own_texture);  // default
+  EXPECT_FALSE(o.depth.retry_doubtful_with_coarse_depth);
+  EXPECT_TRUE(ParseTrackerOptions("").depth.retry_doubtful_with_coarse_depth);  // default
   EXPECT_TRUE(o.live_appearance.enabled);
   EXPECT_TRUE(o.live_appearance.always);
   EXPECT_EQ(o.live_appearance.refresh_frames, 3);

@@ -34,6 +34,18 @@ TrackResult Tracker::AlignPredicted(const Frame& frame, const Rigid3d& predicted
     if (with_all.confidence >= r.confidence) r = std::move(with_all);
     r.summary.times = both;
   }
+  if (r.confidence < trust && options_.depth.retry_doubtful_with_coarse_depth &&
+      CoarseLevelsWithoutDepth(frame)) {
+    // A doubtful frame whose coarse levels followed the texture alone: aligned again with
+    // the depth rows at every level, the better kept.
+    coarse_depth_forced_ = true;
+    TrackResult with_depth = AlignChecked(frame, predicted, levels, /*tracking=*/true);
+    coarse_depth_forced_ = false;
+    StageTimes both = r.summary.times;
+    both += with_depth.summary.times;
+    if (with_depth.confidence > r.confidence) r = std::move(with_depth);
+    r.summary.times = both;
+  }
   if (r.confidence >= trust) {
     const double decayed = std::isfinite(recent_correction_px_)
                                ? po.correction_decay * recent_correction_px_
