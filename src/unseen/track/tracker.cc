@@ -341,7 +341,7 @@ TrackResult Tracker::Align(const Frame& frame, const Rigid3d& world_from_obj, in
 
 bool Tracker::CoarseLevelsWithoutDepth(const Frame& frame) const {
   return !frame.depths.empty() && !options_.depth.coarse_with_own_texture &&
-         !coarse_depth_forced_ && PhotometricJudges() && !learn_from_start_ &&
+         PhotometricJudges() && !learn_from_start_ &&
          model_ == given_model_ && model_->projectors.empty();
 }
 
@@ -496,7 +496,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
     // (DepthModalityOptions::coarse_with_own_texture); a search's scoring span keeps them
     // at its own finest level, where its confidence is measured.
     const bool depth_this_level =
-        use_depth && (level == finest || !CoarseLevelsWithoutDepth(frame));
+        use_depth && (level == finest || span.coarse_depth || !CoarseLevelsWithoutDepth(frame));
     for (int iteration = 0; iteration < max_iterations; ++iteration) {
       ++s.renders;
       const Rigid3d round_pose = pose;

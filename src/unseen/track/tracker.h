@@ -198,12 +198,16 @@ class Tracker {
     // their noise (PyramidOptions::noise_stop_chi2); a search's alignments, which may start
     // far off, run theirs.
     bool tracking = false;
+    // The depth rows join every level even while the model's own texture leads (a doubtful
+    // frame aligned again: DepthModalityOptions::retry_doubtful_with_coarse_depth).
+    bool coarse_depth = false;
   };
   TrackResult AlignChecked(const Frame& frame, const Rigid3d& start, int num_levels,
-                           bool tracking = false) {
+                           bool tracking = false, bool coarse_depth = false) {
     LevelSpan span;
     span.num_levels = num_levels;
     span.tracking = tracking;
+    span.coarse_depth = coarse_depth;
     return AlignChecked(frame, start, span);
   }
   TrackResult AlignChecked(const Frame& frame, const Rigid3d& start, const LevelSpan& span);
@@ -345,9 +349,6 @@ class Tracker {
   DepthModality depth_;
   RegionModality region_;
   bool learn_from_start_ = false;  // the next Track() starts at a given pose (Initialize)
-  // Set while a doubtful frame is aligned again with the depth rows at every level
-  // (DepthModalityOptions::coarse_with_own_texture).
-  bool coarse_depth_forced_ = false;
 
   bool initialized_ = false;
   TrackStatus status_ = TrackStatus::kTracking;

@@ -26,25 +26,26 @@ TrackResult Tracker::AlignPredicted(const Frame& frame, const Rigid3d& predicted
     while (levels < full && expected_px > po.capture_px * double(1 << (levels - 1))) ++levels;
   }
   TrackResult r = AlignChecked(frame, predicted, levels, /*tracking=*/true);
+  // A second alignment replaces r when it is more confident (`or_equal`: also when as
+  // confident); both were paid for.
+  auto keep_better = [&r](TrackResult other, bool or_equal) {
+    StageTimes both = r.summary.times;
+    both += other.summary.times;
+    if (other.confidence > r.confidence || (or_equal && other.confidence == r.confidence)) {
+      r = std::move(other);
+    }
+    r.summary.times = both;
+  };
   const double reach_px = po.capture_px * double(1 << (levels - 1));
   if (levels < full && (r.confidence < trust || r.summary.correction_px > 0.75 * reach_px)) {
-    TrackResult with_all = AlignChecked(frame, predicted, full, /*tracking=*/true);
-    StageTimes both = r.summary.times;  // both alignments were paid for
-    both += with_all.summary.times;
-    if (with_all.confidence >= r.confidence) r = std::move(with_all);
-    r.summary.times = both;
+    keep_better(AlignChecked(frame, predicted, full, /*tracking=*/true), /*or_equal=*/true);
   }
   if (r.confidence < trust && options_.depth.retry_doubtful_with_coarse_depth &&
       CoarseLevelsWithoutDepth(frame)) {
     // A doubtful frame whose coarse levels followed the texture alone: aligned again with
-    // the depth rows at every level, the better kept.
-    coarse_depth_forced_ = true;
-    TrackResult with_depth = AlignChecked(frame, predicted, levels, /*tracking=*/true);
-    coarse_depth_forced_ = false;
-    StageTimes both = r.summary.times;
-    both += with_depth.summary.times;
-    if (with_depth.confidence > r.confidence) r = std::move(with_depth);
-    r.summary.times = both;
+    // the depth rows at every level.
+    keep_better(AlignChecked(frame, predicted, levels, /*tracking=*/true, /*coarse_depth=*/true),
+                /*or_equal=*/false);
   }
   if (r.confidence >= trust) {
     const double decayed = std::isfinite(recent_correction_px_)
