@@ -12,21 +12,27 @@
 //   score(u) = sum_x F(u + x) T'(x) / sqrt(var_M(F, u) sum_x T'(x)^2),
 //   var_M(F, u) = sum_x M(x) F(u + x)^2 - (sum_x M(x) F(u + x))^2 / n,
 // three correlations, each a product of spectra (circular correlations of the zero-padded
-// images; no offset of the valid range wraps around).
+// images; no offset of the valid range wraps around). Images of several channels (colour)
+// are scored as OpenCV scores them, the channels together as one vector: the cross terms,
+// the squares and the templates' energies summed over the channels, each channel centred
+// on its own mean. The cross terms and the squares sum in the frequency domain, so C
+// channels cost C + 2 inverse transforms a template instead of 3 C.
 #pragma once
 
 #include <opencv2/core.hpp>
+#include <vector>
 
 namespace unseen {
 
 class MaskedTemplateMatcher {
  public:
-  // `image`: CV_32FC1 or CV_64FC1, non-empty; templates will be `template_size`, at most
-  // the image's size. Throws unseen::Error otherwise.
+  // `image`: CV_32F or CV_64F of 1 to 4 channels, non-empty; templates will be
+  // `template_size`, at most the image's size. Throws unseen::Error otherwise.
   MaskedTemplateMatcher(const cv::Mat& image, cv::Size template_size);
 
-  // Scores (CV_32FC1, (rows - h + 1) x (cols - w + 1), in [-1, 1]) of `templ` (CV_32FC1 or
-  // CV_64FC1 of template_size) where `mask` (CV_8UC1 of template_size) is non-zero; -1 at
+  // Scores (CV_32FC1, (rows - h + 1) x (cols - w + 1), in [-1, 1]) of `templ` (CV_32F or
+  // CV_64F of template_size, the image's channels) where `mask` (CV_8UC1 of template_size)
+  // is non-zero; -1 at
   // offsets where the image has no variance under the mask, everywhere when the template
   // has none there or the mask is empty. Throws unseen::Error for other sizes or types.
   cv::Mat Match(const cv::Mat& templ, const cv::Mat& mask) const;
@@ -35,8 +41,10 @@ class MaskedTemplateMatcher {
   // matched in many images (a series of frames) is transformed once.
   struct Prepared {
     cv::Size dft_size, template_size;
-    cv::Mat centred_spectrum, mask_spectrum;  // empty: the template scores -1 everywhere
-    double n = 0.0, centred_energy = 0.0;     // mask pixels, sum of T'^2
+    // Per channel; empty: the template scores -1 everywhere.
+    std::vector<cv::Mat> centred_spectra;
+    cv::Mat mask_spectrum;
+    double n = 0.0, centred_energy = 0.0;  // mask pixels, sum of T'^2 over the channels
   };
   // The transforms of `templ` under `mask` (as Match's); Match(Prepare(t, m)) == Match(t, m).
   Prepared Prepare(const cv::Mat& templ, const cv::Mat& mask) const;
@@ -52,7 +60,9 @@ class MaskedTemplateMatcher {
  private:
   cv::Size image_size_, template_size_;
   cv::Size dft_size_;
-  cv::Mat image_spectrum_, squares_spectrum_;  // CCS-packed CV_64F spectra of F and F^2
+  // CCS-packed CV_64F spectra of each channel of F, and of F^2 summed over the channels.
+  std::vector<cv::Mat> image_spectra_;
+  cv::Mat squares_spectrum_;
 };
 
 }  // namespace unseen
