@@ -52,6 +52,39 @@ TEST(MaskedTemplateMatcher, ScoresAreOpenCvsMaskedNormalisedCorrelation) {
   EXPECT_LT(cv::norm(matcher.Match(templ, mask), matcher.Match(scaled, mask), cv::NORM_INF), 1e-5);
 }
 
+// Colour: the channels scored together as one vector, as OpenCV scores a three-channel
+// image; a template whose colours are permuted is no match.
+TEST(MaskedTemplateMatcher, ColourScoresAreOpenCvsOverAllChannels) {
+  std::vector<cv::Mat> planes{SmoothNoise(110, 125, 21), SmoothNoise(110, 125, 22),
+                              SmoothNoise(110, 125, 23)};
+  cv::Mat image;
+  cv::merge(planes, image);
+  const cv::Mat mask = DiscMask(35, 15);
+  const MaskedTemplateMatcher matcher(image, mask.size());
+  const cv::Point at(52, 31);
+  const cv::Mat templ = image(cv::Rect(at, mask.size())).clone();
+  const cv::Mat scores = matcher.Match(templ, mask);
+  cv::Mat expected;
+  cv::matchTemplate(image, templ, expected, cv::TM_CCOEFF_NORMED, mask);
+  ASSERT_EQ(scores.size(), expected.size());
+  cv::patchNaNs(expected, -1.0);
+  EXPECT_LT(cv::norm(scores, expected, cv::NORM_INF), 1e-4);
+  cv::Point peak;
+  double best = 0.0;
+  cv::minMaxLoc(scores, nullptr, &best, nullptr, &peak);
+  EXPECT_EQ(peak, at);
+  EXPECT_NEAR(best, 1.0, 1e-6);
+  // The same pattern in the wrong channels scores low where the right one scores 1.
+  std::vector<cv::Mat> templ_planes;
+  cv::split(templ, templ_planes);
+  std::swap(templ_planes[0], templ_planes[2]);
+  cv::Mat swapped;
+  cv::merge(templ_planes, swapped);
+  EXPECT_LT(matcher.Match(swapped, mask).at<float>(at), 0.7);
+  // A template of another channel count is refused.
+  EXPECT_THROW(matcher.Match(planes[0](cv::Rect(at, mask.size())).clone(), mask), Error);
+}
+
 // A template prepared once is matched in a series of images (frames) of one size: the
 // scores are those of matching it afresh in each.
 TEST(MaskedTemplateMatcher, APreparedTemplateMatchesLaterImagesAsAFreshOne) {

@@ -34,6 +34,18 @@ cv::Mat GradientMagnitude(const cv::Mat& bgr, const PreprocessOptions& preproces
   return sum;
 }
 
+// The image a template is correlated on (ReacquisitionOptions::colour_correlation): the
+// gradient magnitude, or the LINF-normalised (4.11), blurred colour (three channels).
+cv::Mat CorrelationFeature(const cv::Mat& bgr, bool colour, const PreprocessOptions& preprocess,
+                           int level) {
+  if (!colour) return GradientMagnitude(bgr, preprocess, level);
+  PreprocessOptions p = preprocess;
+  p.use_linf = true;
+  PreprocessedImage pre;
+  Preprocess(bgr, p, level, false, &pre);
+  return pre.blurred;
+}
+
 // One peak of a correlation map: template top-left position (sub-pixel) and NCC.
 struct Peak {
   Eigen::Vector2d position;
@@ -83,15 +95,16 @@ struct CameraWindow {
   double radius_px = 0.0;  // bounding sphere's projected radius, level px
   int half = 0;            // templates are (2 half + 1)^2 around the projected centre
   PixelRect padded;        // level pixels the feature map covers (may exceed the image)
-  cv::Mat feature;         // gradient magnitude over `padded`, 0 outside the image
+  cv::Mat feature;         // CorrelationFeature over `padded`, 0 outside the image
   cv::Scalar fill;         // mean colour of the window (the templates' background)
+  bool colour = false;     // the feature is the colour's
   // Correlates templates with `feature`, its transforms made once for all of them.
   std::shared_ptr<const MaskedTemplateMatcher> matcher;
 };
 
 CameraWindow PrepareWindow(const cv::Mat& image, const RigCamera& rig_camera,
                            const Eigen::Vector3d& centre_in_world, double sphere_radius,
-                           int level, const ReacquisitionOptions& options,
+                           int level, bool colour, const ReacquisitionOptions& options,
                            const PreprocessOptions& preprocess) {
   CameraWindow w;
   if (image.empty()) return w;  // no image from this camera this frame
@@ -122,9 +135,10 @@ CameraWindow PrepareWindow(const cv::Mat& image, const RigCamera& rig_camera,
   }
   const cv::Mat window = DownsampledRegion(image, level, inside);
   w.fill = cv::mean(window);
-  cv::copyMakeBorder(GradientMagnitude(window, preprocess, level), w.feature,
+  w.colour = colour;
+  cv::copyMakeBorder(CorrelationFeature(window, colour, preprocess, level), w.feature,
                      inside.y0 - w.padded.y0, w.padded.y1 - inside.y1, inside.x0 - w.padded.x0,
-                     w.padded.x1 - inside.x1, cv::BORDER_CONSTANT, cv::Scalar(0));
+                     w.padded.x1 - inside.x1, cv::BORDER_CONSTANT, cv::Scalar::all(0));
   w.matcher = std::make_shared<const MaskedTemplateMatcher>(w.feature, cv::Size(side, side));
   w.ok = true;
   return w;
@@ -189,6 +203,7 @@ CameraMatch MatchInWindow(const CameraWindow& w, const Mesh& model,
   double fill_moved = 0.0;
   for (int k = 0; k < 3; ++k) fill_moved = std::max(fill_moved, std::abs(t.fill[k] - w.fill[k]));
   if (!t.prepared || !w.matcher->Fits(*t.prepared) ||
+      t.prepared->centred_spectra.size() != static_cast<size_t>(w.feature.channels()) ||
       fill_moved > CorrelationTemplateCache::kFillTolerance) {
     cv::Mat composite(side, side, CV_32FC3);
     for (int y = 0; y < side; ++y) {
@@ -201,7 +216,7 @@ CameraMatch MatchInWindow(const CameraWindow& w, const Mesh& model,
         }
       }
     }
-    const cv::Mat template_feature = GradientMagnitude(composite, preprocess, level);
+    const cv::Mat template_feature = CorrelationFeature(composite, w.colour, preprocess, level);
     // Compared over the object and its silhouette's blurred edge; the rest of the square
     // is background, unknown.
     cv::Mat mask;
@@ -280,10 +295,11 @@ std::vector<CorrelationSeed> FindCorrelationSeeds(
   }
   if (diameter_px <= 0.0) return seeds;
   const int level = CorrelationLevel(diameter_px, options);
+  const bool colour = options.colour_correlation && model.HasAppearance();
   std::vector<CameraWindow> windows;
   for (int c = 0; c < rig.size(); ++c) {
     windows.push_back(PrepareWindow(images[c], rig.cameras[c], centre_in_world, sphere_radius,
-                                    level, options, preprocess));
+                                    level, colour, options, preprocess));
   }
 
   for (int index = 0; index < static_cast<int>(references.size()); ++index) {
@@ -448,6 +464,16 @@ TrackResult Reacquisition::ScoreCoarse(const std::vector<cv::Mat>& images,
   return AlignCoarse(images, finest, levels - finest, start);
 }
 
+ReacquisitionOptions Reacquisition::CorrelationOptions() const {
+  // Colour correlates only while the model's colours are trusted: not when they were found
+  // not to fit the images and the silhouette leads (their pattern then finds look-alikes as
+  // readily as the object: a weakly textured duck behind a textured spider).
+  ReacquisitionOptions o = tracker_.options().reacquisition;
+  o.colour_correlation =
+      o.colour_correlation && tracker_.photometric_in_use() && !tracker_.photometric_demoted();
+  return o;
+}
+
 TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
                                   const Rigid3d& coasted) {
   const std::vector<cv::Mat>& images = frame.images;
@@ -486,7 +512,8 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
     // The same last good pose in every lost frame: its templates are rendered once.
     templates_.Bind(tracker_.shared_model());
     seeds = FindCorrelationSeeds(images, tracker_.rig(), templates_.model(), sphere_centre_,
-                                 sphere_radius_, orientations, o, options.preprocess, &templates_);
+                                 sphere_radius_, orientations, CorrelationOptions(),
+                                 options.preprocess, &templates_);
   }
   const double correlation_ms = timer.ElapsedMilliseconds();
   times.preprocess_ms += correlation_ms;
@@ -598,12 +625,29 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
   }
   // Successive halving down the pyramid: at each finer level (but the finest) a quarter of
   // the survivors, at least refine_candidates, continue from where they converged; the
-  // finer level tells orientations apart that the coarse silhouette does not.
+  // finer level tells orientations apart that the coarse silhouette does not. A survivor
+  // that falls below min_score there gives its place to the next best, up to twice as many
+  // tried: a look-alike (a textured occluder, a background pattern) can outscore the object
+  // at the coarse level and only the finer one tells them apart.
   for (int level = finest - 1; level >= 1; --level) {
     const int keep = std::max(o.refine_candidates, (static_cast<int>(scored.size()) + 3) / 4);
-    if (keep < static_cast<int>(scored.size())) scored.resize(keep);
-    while (!scored.empty() && scored.back().score < o.min_score) scored.pop_back();
-    continue_scored(level, 1);
+    std::vector<Scored> survivors;
+    int found = 0;
+    for (int k = 0; k < static_cast<int>(scored.size()) && k < 2 * keep && found < keep; ++k) {
+      Scored c = scored[k];
+      if (c.score < o.min_score) break;
+      TrackResult r = AlignCoarse(images, level, 1, c.pose);
+      times += r.summary.times;
+      UNSEEN_LOG_DEBUG("candidate {} at level {}: conf {:.2f} at {}", c.order, level, r.confidence,
+                       r.world_from_obj.ToString());
+      if (!r.world_from_obj.IsValid()) continue;
+      c.score = r.confidence;
+      c.pose = r.world_from_obj;
+      if (c.score >= o.min_score) ++found;
+      survivors.push_back(c);
+    }
+    scored = std::move(survivors);
+    std::sort(scored.begin(), scored.end(), by_score);
   }
   UNSEEN_LOG_DEBUG("scored {} candidates in {:.1f} ms", candidates.size(),
                    timer.ElapsedMilliseconds() - correlation_ms);
@@ -634,8 +678,8 @@ TrackResult Reacquisition::Seed(const Frame& frame, const Rigid3d& predicted, Tr
   if (!o.use_correlation) return first;
   StageTimes times = first.summary.times;
   Timer timer;
-  ReacquisitionOptions seeding = o;  // the object is near where its motion put it
-  seeding.search_radii = o.seed_search_radii;
+  ReacquisitionOptions seeding = CorrelationOptions();
+  seeding.search_radii = o.seed_search_radii;  // the object is near where its motion put it
   const std::vector<CorrelationSeed> seeds =
       FindCorrelationSeeds(images, tracker_.rig(), tracker_.model(), sphere_centre_,
                            sphere_radius_, predicted, seeding, options.preprocess);

@@ -171,6 +171,9 @@ class Reacquisition {
   double sphere_radius() const { return sphere_radius_; }
 
  private:
+  // The tracker's reacquisition options, the colour correlation only while its photometric
+  // modality is in use and not demoted.
+  ReacquisitionOptions CorrelationOptions() const;
   // The tracker's alignment of `start` on the pyramid levels [finest, finest + num_levels)
   // of `images` (full resolution), score_iterations rounds per level
   // (Tracker::AlignLevels); the full alignment when `finest` is 0.

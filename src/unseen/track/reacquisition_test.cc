@@ -105,27 +105,68 @@ TEST_F(Reacquire, CorrelationFindsAKnownShiftDespiteAGainChange) {
   const cv::Mat image = Image(truth);
   cv::Mat darker = image * 0.45;  // a gain, and a shading ramp across the image
   for (int x = 0; x < darker.cols; ++x) darker.col(x) *= 0.6 + 0.8 * x / double(darker.cols);
-  ReacquisitionOptions options;
   const PreprocessOptions preprocess;
-  for (const cv::Mat& input : {image, darker}) {
+  // Both features: the gradient magnitude (an object of one colour) and the LINF-normalised
+  // colour (a textured one, as this cube), whose peak the shading ramp moves by a pixel.
+  for (const bool colour : {false, true}) {
+    ReacquisitionOptions options;
+    options.colour_correlation = colour;
+    const double tolerance_px = colour ? 1.5 : 1.0;
+    for (const cv::Mat& input : {image, darker}) {
+      const std::vector<CorrelationSeed> seeds = FindCorrelationSeeds(
+          {input}, rig_, cube_, centre_, radius_, reference, options, preprocess);
+      ASSERT_FALSE(seeds.empty());
+      const CorrelationSeed& s = seeds[0];
+      // The expected shift, pixels of the correlation level.
+      const PinholeCamera cam = rig_.cameras[0].intrinsics.PyramidLevel(s.level);
+      const Eigen::Vector2d expected =
+          cam.Project(truth * centre_) - cam.Project(reference * centre_);
+      EXPECT_GE(s.level, 1);
+      EXPECT_GT(expected.norm(), 20.0);
+      EXPECT_LT((s.shift_px[0] - expected).norm(), tolerance_px)
+          << "colour " << colour << " found " << s.shift_px[0].transpose() << " expected "
+          << expected.transpose();
+      EXPECT_GT(s.score, 0.5) << "colour " << colour;
+      // Depth kept, the lateral translation recovered to about a pixel of that level.
+      const double px_m = (1 << s.level) * 1.0 / 837.3;
+      EXPECT_LT(Difference(s.world_from_obj, truth).translation, (tolerance_px + 0.5) * px_m);
+      EXPECT_DOUBLE_EQ(s.world_from_obj.translation().z(), reference.translation().z());
+    }
+  }
+}
+
+// A motion-blurred textured cube beside a sharp look-alike of it with its red and blue
+// swapped (its edges where the cube's are, its colours not): the gradient magnitude, which
+// the blur took from the cube and not from the look-alike, prefers the look-alike; the
+// colour correlation finds the cube by its texture.
+TEST_F(Reacquire, ColourCorrelationFindsABlurredCubeBesideASharpLookAlike) {
+  const Rigid3d truth = CubePose();
+  const Rigid3d reference(truth.rotation(), truth.translation() + Eigen::Vector3d(0.06, 0.0, 0.0));
+  const cv::Mat sharp = Image(truth);
+  cv::Mat image;
+  cv::blur(sharp, image, cv::Size(31, 1));  // horizontal motion during the exposure
+  const PinholeCamera& cam0 = rig_.cameras[0].intrinsics;
+  const Eigen::Vector2d centre_px = cam0.Project(truth * centre_);
+  const int half = static_cast<int>(std::ceil(cam0.fx * radius_ / (truth * centre_).z()));
+  const cv::Rect cube_box(static_cast<int>(centre_px.x()) - half,
+                          static_cast<int>(centre_px.y()) - half, 2 * half, 2 * half);
+  const cv::Rect look_alike = cube_box + cv::Point(220, 0);
+  ASSERT_EQ(look_alike & cv::Rect(0, 0, image.cols, image.rows), look_alike);
+  cv::cvtColor(sharp(cube_box), image(look_alike), cv::COLOR_BGR2RGB);
+  const PreprocessOptions preprocess;
+  auto miss_px = [&](bool colour) {
+    ReacquisitionOptions options;
+    options.colour_correlation = colour;
     const std::vector<CorrelationSeed> seeds = FindCorrelationSeeds(
-        {input}, rig_, cube_, centre_, radius_, reference, options, preprocess);
-    ASSERT_FALSE(seeds.empty());
-    const CorrelationSeed& s = seeds[0];
-    // The expected shift, pixels of the correlation level.
-    const PinholeCamera cam = rig_.cameras[0].intrinsics.PyramidLevel(s.level);
+        {image}, rig_, cube_, centre_, radius_, reference, options, preprocess);
+    if (seeds.empty()) return 1e9;
+    const PinholeCamera cam = cam0.PyramidLevel(seeds[0].level);
     const Eigen::Vector2d expected =
         cam.Project(truth * centre_) - cam.Project(reference * centre_);
-    EXPECT_GE(s.level, 1);
-    EXPECT_GT(expected.norm(), 20.0);
-    EXPECT_LT((s.shift_px[0] - expected).norm(), 1.0)
-        << "found " << s.shift_px[0].transpose() << " expected " << expected.transpose();
-    EXPECT_GT(s.score, 0.5);
-    // Depth kept, the lateral translation recovered to a pixel of that level.
-    const double px_m = (1 << s.level) * 1.0 / 837.3;
-    EXPECT_LT(Difference(s.world_from_obj, truth).translation, 1.5 * px_m);
-    EXPECT_DOUBLE_EQ(s.world_from_obj.translation().z(), reference.translation().z());
-  }
+    return (seeds[0].shift_px[0] - expected).norm();
+  };
+  EXPECT_LT(miss_px(true), 1.5);
+  EXPECT_GT(miss_px(false), 5.0);
 }
 
 // While lost, the same reference poses are correlated frame after frame: their templates
@@ -314,14 +355,23 @@ TEST_F(Reacquire, AJumpWithARotationIsReacquiredByTheRotationCandidates) {
        {Eigen::Vector3d(0.0, 0.0, 40.0 * kDeg), Eigen::Vector3d(30.0 * kDeg, 0.0, 0.0)}) {
     const std::vector<Rigid3d> poses =
         JumpSequence(CubePose(), Eigen::Vector3d(0.13, 0.03, 0.0), turn, centre_, 4, 8);
-    Tracker with(rig_, cube_);
+    // The rotation candidates with the gradient-magnitude correlation, whose unturned
+    // template does not find the turned cube.
+    TrackerOptions gradient;
+    gradient.reacquisition.colour_correlation = false;
+    Tracker with(rig_, cube_, gradient);
     const int held = TrackUntilHeld(&with, poses, 4);
     EXPECT_GE(held, 0) << turn.transpose();
     EXPECT_LE(held, 7) << turn.transpose();
-    TrackerOptions no_rotations;
+    TrackerOptions no_rotations = gradient;
     no_rotations.reacquisition.rotation_deg = 0.0;
     Tracker without(rig_, cube_, no_rotations);
     EXPECT_EQ(TrackUntilHeld(&without, poses, 4), -1) << turn.transpose();
+    // With the default colour correlation too.
+    Tracker by_colour(rig_, cube_);
+    const int found = TrackUntilHeld(&by_colour, poses, 4);
+    EXPECT_GE(found, 0) << turn.transpose();
+    EXPECT_LE(found, 7) << turn.transpose();
   }
 }
 

@@ -319,6 +319,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"search_offset", YamlField(&fa.search_offset)}}},
       {"reacquisition",
        {{"use_correlation", YamlField(&re.use_correlation)},
+        {"colour_correlation", YamlField(&re.colour_correlation)},
         {"seed_object_px", YamlField(&re.seed_object_px)},
         {"search_radii", YamlField(&re.search_radii)},
         {"seed_search_radii", YamlField(&re.seed_search_radii)},

@@ -240,6 +240,13 @@ struct FailureOptions {
 // at a time and the best refine_candidates are aligned at full resolution.
 struct ReacquisitionOptions {
   bool use_correlation = true;     // compute the 2-D correlation seed
+  // For a model with appearance (Mesh::HasAppearance) whose colours the tracker trusts (its
+  // photometric modality in use and not demoted), correlate the LINF-normalised colour
+  // (the three channels as one vector) instead of the gradient magnitude: the texture's
+  // own pattern rather than its edges' strength, which motion blur and a soft camera take
+  // away. A model of one colour, or one whose colours do not fit, keeps the gradient
+  // magnitude (its silhouette).
+  bool colour_correlation = true;
   // The correlation runs at the coarsest pyramid level where the object's bounding sphere
   // is still at least this wide, pixels of that level.
   double seed_object_px = 24.0;
