@@ -24,6 +24,26 @@ cv::Mat DiscMask(int side, int radius) {
   return mask;
 }
 
+// Expects `matcher`'s scores of the image's own square at `at` to be OpenCV's masked
+// TM_CCOEFF_NORMED and to peak there at 1; returns the scores.
+cv::Mat ExpectOpenCvScores(const MaskedTemplateMatcher& matcher, const cv::Mat& image,
+                           const cv::Mat& templ, const cv::Mat& mask, cv::Point at) {
+  const cv::Mat scores = matcher.Match(templ, mask);
+  cv::Mat expected;
+  cv::matchTemplate(image, templ, expected, cv::TM_CCOEFF_NORMED, mask);
+  EXPECT_EQ(scores.size(), expected.size());
+  EXPECT_EQ(scores.type(), CV_32FC1);
+  if (scores.size() != expected.size()) return scores;
+  cv::patchNaNs(expected, -1.0);
+  EXPECT_LT(cv::norm(scores, expected, cv::NORM_INF), 1e-4);
+  cv::Point peak;
+  double best = 0.0;
+  cv::minMaxLoc(scores, nullptr, &best, nullptr, &peak);
+  EXPECT_EQ(peak, at);
+  EXPECT_NEAR(best, 1.0, 1e-6);
+  return scores;
+}
+
 // The scores are OpenCV's masked TM_CCOEFF_NORMED, and several templates share the image's
 // transforms.
 TEST(MaskedTemplateMatcher, ScoresAreOpenCvsMaskedNormalisedCorrelation) {
@@ -32,18 +52,7 @@ TEST(MaskedTemplateMatcher, ScoresAreOpenCvsMaskedNormalisedCorrelation) {
   const MaskedTemplateMatcher matcher(image, mask.size());
   for (const cv::Point at : {cv::Point(30, 20), cv::Point(100, 90), cv::Point(0, 0)}) {
     const cv::Mat templ = image(cv::Rect(at, mask.size())).clone();
-    const cv::Mat scores = matcher.Match(templ, mask);
-    cv::Mat expected;
-    cv::matchTemplate(image, templ, expected, cv::TM_CCOEFF_NORMED, mask);
-    ASSERT_EQ(scores.size(), expected.size());
-    ASSERT_EQ(scores.type(), CV_32FC1);
-    cv::patchNaNs(expected, -1.0);
-    EXPECT_LT(cv::norm(scores, expected, cv::NORM_INF), 1e-4);
-    cv::Point peak;
-    double best = 0.0;
-    cv::minMaxLoc(scores, nullptr, &best, nullptr, &peak);
-    EXPECT_EQ(peak, at);
-    EXPECT_NEAR(best, 1.0, 1e-6);
+    ExpectOpenCvScores(matcher, image, templ, mask, at);
   }
   // A gain and an offset of the template do not change the scores; a darker copy of the
   // image region still peaks there.
@@ -63,17 +72,7 @@ TEST(MaskedTemplateMatcher, ColourScoresAreOpenCvsOverAllChannels) {
   const MaskedTemplateMatcher matcher(image, mask.size());
   const cv::Point at(52, 31);
   const cv::Mat templ = image(cv::Rect(at, mask.size())).clone();
-  const cv::Mat scores = matcher.Match(templ, mask);
-  cv::Mat expected;
-  cv::matchTemplate(image, templ, expected, cv::TM_CCOEFF_NORMED, mask);
-  ASSERT_EQ(scores.size(), expected.size());
-  cv::patchNaNs(expected, -1.0);
-  EXPECT_LT(cv::norm(scores, expected, cv::NORM_INF), 1e-4);
-  cv::Point peak;
-  double best = 0.0;
-  cv::minMaxLoc(scores, nullptr, &best, nullptr, &peak);
-  EXPECT_EQ(peak, at);
-  EXPECT_NEAR(best, 1.0, 1e-6);
+  ExpectOpenCvScores(matcher, image, templ, mask, at);
   // The same pattern in the wrong channels scores low where the right one scores 1.
   std::vector<cv::Mat> templ_planes;
   cv::split(templ, templ_planes);

@@ -596,18 +596,21 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
   // is a quiet one.
   quiet_ = finest == 0 ? best.confidence < o.min_score
                        : scored.empty() || scored.front().score < o.min_score;
-  // Aligns every scored candidate on from where it stopped (`num_levels` from `level`) and
-  // sorts them again.
+  // Aligns candidate `c` on from where it stopped (`num_levels` from `level`); false (the
+  // candidate as it was) when that gave no valid pose.
+  auto continue_one = [&](Scored* c, int level, int num_levels) {
+    TrackResult r = AlignCoarse(images, level, num_levels, c->pose);
+    times += r.summary.times;
+    UNSEEN_LOG_DEBUG("candidate {} at level {}: conf {:.2f} at {}", c->order, level, r.confidence,
+                     r.world_from_obj.ToString());
+    if (!r.world_from_obj.IsValid()) return false;
+    c->score = r.confidence;
+    c->pose = r.world_from_obj;
+    return true;
+  };
+  // The same for every scored candidate, sorted again.
   auto continue_scored = [&](int level, int num_levels) {
-    for (Scored& c : scored) {
-      TrackResult r = AlignCoarse(images, level, num_levels, c.pose);
-      times += r.summary.times;
-      UNSEEN_LOG_DEBUG("candidate {} at level {}: conf {:.2f} at {}", c.order, level, r.confidence,
-                       r.world_from_obj.ToString());
-      if (!r.world_from_obj.IsValid()) continue;
-      c.score = r.confidence;
-      c.pose = r.world_from_obj;
-    }
+    for (Scored& c : scored) continue_one(&c, level, num_levels);
     std::sort(scored.begin(), scored.end(), by_score);
   };
   // Successive halving in rounds at the scoring level: each candidate had score_iterations
@@ -636,13 +639,7 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
     for (int k = 0; k < static_cast<int>(scored.size()) && k < 2 * keep && found < keep; ++k) {
       Scored c = scored[k];
       if (c.score < o.min_score) break;
-      TrackResult r = AlignCoarse(images, level, 1, c.pose);
-      times += r.summary.times;
-      UNSEEN_LOG_DEBUG("candidate {} at level {}: conf {:.2f} at {}", c.order, level, r.confidence,
-                       r.world_from_obj.ToString());
-      if (!r.world_from_obj.IsValid()) continue;
-      c.score = r.confidence;
-      c.pose = r.world_from_obj;
+      if (!continue_one(&c, level, 1)) continue;
       if (c.score >= o.min_score) ++found;
       survivors.push_back(c);
     }
