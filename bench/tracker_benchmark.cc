@@ -34,6 +34,7 @@
 #include "unseen/geometry/rigid3.h"
 #include "unseen/io/sequence.h"
 #include "unseen/mesh/primitives.h"
+#include "unseen/select/known_model_pose.h"
 #include "unseen/synth/scene.h"
 #include "unseen/synth/synthesizer.h"
 #include "unseen/system/frame_source.h"
@@ -130,6 +131,8 @@ RunOutcome Execute(const Run& run, int max_frames) {
   // (a 10 fps sequence was predicted as if at 30 fps).
   if (sequence.fps() > 0) options.frame_interval_s = 1.0 / sequence.fps();
   Tracker tracker(sequence.rig(), std::move(model), options);
+  // As `unseen track` with a model file: a lost object is also tried in its views' turns.
+  tracker.SetPoseProposer(ViewBankProposer(&tracker));
   const auto start = sequence.GroundTruth(0);
   UNSEEN_CHECK(start.has_value(), "{}: frame 0 has no ground truth", run.sequence_dir);
   const bool off = run.start_offset_m > 0.0 || run.start_turn_deg > 0.0;

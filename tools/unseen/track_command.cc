@@ -26,6 +26,7 @@
 #include "unseen/mesh/mesh_io.h"
 #include "unseen/model/model_updater.h"
 #include "unseen/model/modeller.h"
+#include "unseen/select/known_model_pose.h"
 #include "unseen/system/frame_source.h"
 #include "unseen/system/tracking_session.h"
 #include "unseen/track/tracker.h"
@@ -191,6 +192,9 @@ void RunTrack(const TrackArgs& args) {
   // The predictor's time step is the sequence's frame interval.
   if (sequence.fps() > 0) tracker_options.frame_interval_s = 1.0 / sequence.fps();
   Tracker tracker(sequence.rig(), std::move(model), tracker_options);
+  // A known model: a lost object found again by correlation is also tried in the
+  // orientations its views match there (an on-line model changes, its views would not).
+  if (!args.unknown) tracker.SetPoseProposer(ViewBankProposer(&tracker));
   // --init auto: the first frame is the one where the model was found (its result is the
   // search's; the tracker starts at that pose with the next frame).
   std::optional<KnownObjectStart> found;

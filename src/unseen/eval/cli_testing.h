@@ -5,6 +5,7 @@
 #pragma once
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -16,9 +17,12 @@
 
 namespace unseen::testing {
 
-// A path in the temporary folder, unique to the test program through `prefix`.
+// A path in the temporary folder, unique to the test program through `prefix` and to its
+// process (two test runs at once, from two checkouts, do not share files).
 inline std::string CliTempPath(const std::string& prefix, const std::string& name) {
-  return (std::filesystem::temp_directory_path() / ("unseen_" + prefix + "_" + name)).string();
+  return (std::filesystem::temp_directory_path() /
+          fmt::format("unseen_{}_{}_{}", prefix, static_cast<long>(::getpid()), name))
+      .string();
 }
 
 inline std::string ReadText(const std::string& path) {

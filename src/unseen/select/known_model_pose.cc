@@ -3,10 +3,13 @@
 
 #include <fmt/format.h>
 
+#include <memory>
+
 #include <opencv2/imgproc.hpp>
 
 #include "unseen/render/rasterizer.h"
 #include "unseen/util/error.h"
+#include "unseen/util/logging.h"
 #include "unseen/util/timer.h"
 
 namespace unseen {
@@ -127,6 +130,30 @@ PixelRect SilhouetteBox(const Mesh& model, const PinholeCamera& camera,
   if (bounds.empty()) return {};
   return {buffers.roi.x0 + bounds.x, buffers.roi.y0 + bounds.y,
           buffers.roi.x0 + bounds.x + bounds.width, buffers.roi.y0 + bounds.y + bounds.height};
+}
+
+PoseProposer ViewBankProposer(Tracker* tracker, const KnownModelPoseOptions& options) {
+  options.Check();
+  UNSEEN_CHECK(tracker != nullptr, "ViewBankProposer: no tracker");
+  auto poser = std::make_shared<std::shared_ptr<const KnownModelPoser>>();
+  auto failed = std::make_shared<bool>(false);
+  return [tracker, options, poser, failed](const Frame& frame, int camera, const PixelRect& box) {
+    if (*failed) return std::vector<Rigid3d>();
+    try {
+      if (!*poser) {
+        Timer timer;
+        *poser = std::make_shared<const KnownModelPoser>(tracker, options);
+        UNSEEN_LOG_INFO("view-bank proposals: {} views rendered in {:.0f} ms",
+                        options.views.num_directions * options.views.num_rolls,
+                        timer.ElapsedMilliseconds());
+      }
+      return (*poser)->Candidates(frame, camera, box);
+    } catch (const Error& e) {
+      *failed = !*poser;  // the views could not be made: no proposals from now on
+      UNSEEN_LOG_INFO("view-bank proposals: none: {}", e.what());
+      return std::vector<Rigid3d>();
+    }
+  };
 }
 
 }  // namespace unseen

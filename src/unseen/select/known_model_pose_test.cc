@@ -4,8 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 
 #include "unseen/mesh/primitives.h"
+#include "unseen/render/rasterizer.h"
 #include "unseen/track/test_scene.h"
 #include "unseen/util/error.h"
 
@@ -116,6 +118,37 @@ TEST(SilhouetteBox, BoundsTheProjectedModel) {
   EXPECT_TRUE(SilhouetteBox(cube, camera,
                             Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, 0, -1.0)))
                   .empty());
+}
+
+// The view bank's proposals for a cube turned 60 degrees from any pose the tracker saw:
+// one of the first four is within 15 degrees of it (the tracker's alignment does the rest).
+TEST(ViewBankProposer, ProposesTheOrientationOfATurnedCube) {
+  const Mesh cube = MakeLetteredCube(0.096, 64);
+  const Rig rig = testing::OneCameraRig();
+  const RigCamera& camera = rig.cameras[0];
+  const cv::Mat background = testing::Background(camera.intrinsics, 3);
+  Tracker tracker(rig, cube);
+  const PoseProposer propose = ViewBankProposer(&tracker);
+  const Rigid3d truth(ExpSO3(Eigen::Vector3d(0.0, 60.0 * kDeg, 0.0)) *
+                          ExpSO3(Eigen::Vector3d(0.45, 0.7, 0.1)),
+                      Eigen::Vector3d(0.04, 0.03, 1.0));
+  const Frame frame =
+      OneImage(testing::RenderOverBackground(cube, camera, truth, background));
+  // The cube's box: its silhouette's bounding box at the true pose.
+  RenderBuffers buffers;
+  Render(cube, camera.intrinsics, camera.cam_from_world() * truth, camera.intrinsics.ImageRect(),
+         RenderOptions{}, &buffers);
+  const cv::Rect bounds = cv::boundingRect(buffers.mask);
+  const PixelRect box{bounds.x, bounds.y, bounds.x + bounds.width, bounds.y + bounds.height};
+  const std::vector<Rigid3d> proposals = propose(frame, 0, box);
+  ASSERT_GE(proposals.size(), 4u);
+  double closest = 1e9;
+  for (int k = 0; k < 4; ++k) {
+    closest = std::min(closest, Difference(proposals[k], truth).rotation_rad);
+  }
+  EXPECT_LT(closest, 15.0 * kDeg);
+  // A box with nothing of the model in it is no crash: proposals (wrong ones) or none.
+  EXPECT_NO_THROW(propose(OneImage(background), 0, PixelRect{10, 10, 60, 60}));
 }
 
 }  // namespace

@@ -18,6 +18,7 @@ namespace unseen {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Gradient magnitude of the LINF-normalised (4.11), blurred image, the channels combined
 // in quadrature: a gain or a smooth shading of the input changes it little, and an edge
@@ -440,6 +441,61 @@ Reacquisition::Reacquisition(Tracker* tracker) : tracker_(*tracker) {
   tracker_.model().BoundingSphere(&centre, &radius);
   sphere_centre_ = centre.cast<double>();
   sphere_radius_ = radius;
+  box_min_ = box_max_ = sphere_centre_;
+  for (const Eigen::Vector3f& v : tracker_.model().vertices) {
+    box_min_ = box_min_.cwiseMin(v.cast<double>());
+    box_max_ = box_max_.cwiseMax(v.cast<double>());
+  }
+}
+
+std::vector<Rigid3d> Reacquisition::Proposals(const Frame& frame, const CorrelationSeed& seed) const {
+  const PoseProposer& proposer = tracker_.pose_proposer();
+  const int wanted = tracker_.options().reacquisition.proposals;
+  if (!proposer || wanted <= 0) return {};
+  // The object's box where the seed puts it, in the camera that sees it largest: the
+  // projection of the model's bounding box (the proposer takes its longer side).
+  const Rig& rig = tracker_.rig();
+  int camera = -1;
+  PixelRect box;
+  for (int c = 0; c < rig.size(); ++c) {
+    if (c >= static_cast<int>(frame.images.size()) || frame.images[c].empty() ||
+        !seed.shift_px[c].allFinite()) {
+      continue;
+    }
+    const PinholeCamera& intrinsics = rig.cameras[c].intrinsics;
+    const Rigid3d cam_from_obj = rig.cameras[c].cam_from_world() * seed.world_from_obj;
+    double x0 = kInf, y0 = kInf, x1 = -kInf, y1 = -kInf;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Eigen::Vector3d p((corner & 1) ? box_max_.x() : box_min_.x(),
+                              (corner & 2) ? box_max_.y() : box_min_.y(),
+                              (corner & 4) ? box_max_.z() : box_min_.z());
+      const Eigen::Vector3d in_cam = cam_from_obj * p;
+      if (!(in_cam.z() > 0.0)) return {};
+      const Eigen::Vector2d px = intrinsics.Project(in_cam);
+      x0 = std::min(x0, px.x());
+      y0 = std::min(y0, px.y());
+      x1 = std::max(x1, px.x());
+      y1 = std::max(y1, px.y());
+    }
+    const PixelRect rect =
+        PixelRect{static_cast<int>(std::floor(x0)), static_cast<int>(std::floor(y0)),
+                  static_cast<int>(std::ceil(x1)), static_cast<int>(std::ceil(y1))}
+            .Intersect(intrinsics.ImageRect());
+    if (rect.width() < 8 || rect.height() < 8) continue;
+    if (camera < 0 || rect.width() * rect.height() > box.width() * box.height()) {
+      camera = c;
+      box = rect;
+    }
+  }
+  if (camera < 0) return {};
+  // Each proposal's orientation, about the object's centre where the seed puts it.
+  const Eigen::Vector3d centre = seed.world_from_obj * sphere_centre_;
+  std::vector<Rigid3d> out;
+  for (const Rigid3d& p : proposer(frame, camera, box)) {
+    if (static_cast<int>(out.size()) >= wanted) break;
+    out.emplace_back(p.rotation(), centre - p.rotation() * sphere_centre_);
+  }
+  return out;
 }
 
 Reacquisition::~Reacquisition() = default;
@@ -550,15 +606,20 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
   quiet_last_good_ = last_good;
   const int num_seeds = std::min(static_cast<int>(seeds.size()), static_cast<int>(around.size()));
   const int num_others = static_cast<int>(around.size()) - num_seeds;
+  // The seeds, the proposer's orientations at the best of them, then the others.
+  candidates.insert(candidates.end(), around.begin(), around.begin() + num_seeds);
+  if (!seeds.empty()) {
+    const std::vector<Rigid3d> proposed = Proposals(frame, seeds[0]);
+    candidates.insert(candidates.end(), proposed.begin(), proposed.end());
+  }
   if (quiet_ && o.quiet_candidates >= 0 && o.quiet_candidates < num_others) {
-    // The object was not seen in the last search: the seeds, and a slice of the others.
-    candidates.insert(candidates.end(), around.begin(), around.begin() + num_seeds);
+    // The object was not seen in the last search: a slice of the others.
     for (int k = 0; k < o.quiet_candidates; ++k) {
       candidates.push_back(around[num_seeds + (quiet_slice_ * o.quiet_candidates + k) % num_others]);
     }
     ++quiet_slice_;
   } else {
-    candidates.insert(candidates.end(), around.begin(), around.end());
+    candidates.insert(candidates.end(), around.begin() + num_seeds, around.end());
   }
 
   // Score every candidate at the coarse levels (the full pyramid when it has no more); the
@@ -648,13 +709,18 @@ TrackResult Reacquisition::Search(const Frame& frame, const Rigid3d& last_good,
   }
   UNSEEN_LOG_DEBUG("scored {} candidates in {:.1f} ms", candidates.size(),
                    timer.ElapsedMilliseconds() - correlation_ms);
-  for (int k = 0; k < static_cast<int>(scored.size()) && k < o.refine_candidates; ++k) {
+  // The best refine_candidates are refined; one whose refinement collapses (below
+  // min_score: the coarse levels took a look-alike for the object) gives its place to the
+  // next, once.
+  int refinements = o.refine_candidates;
+  for (int k = 0; k < static_cast<int>(scored.size()) && k < refinements; ++k) {
     if (best.confidence >= options.failure.recover_confidence) break;
     if (scored[k].score < o.min_score) break;
     TrackResult r = tracker_.Align(frame, scored[k].pose, std::min(o.refine_levels, levels));
     times += r.summary.times;
     UNSEEN_LOG_DEBUG("refined candidate {}: conf {:.2f} at {}", scored[k].order, r.confidence,
                      r.world_from_obj.ToString());
+    if (r.confidence < o.min_score && refinements == o.refine_candidates) ++refinements;
     if (r.confidence > best.confidence) {
       best = std::move(r);
       choice = scored[k].order;

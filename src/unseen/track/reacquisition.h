@@ -174,6 +174,9 @@ class Reacquisition {
   // The tracker's reacquisition options, the colour correlation only while its photometric
   // modality is in use and not demoted.
   ReacquisitionOptions CorrelationOptions() const;
+  // The tracker's pose proposer's orientations (ReacquisitionOptions::proposals) for the
+  // object where `seed` puts it; none without a proposer or a camera that sees it.
+  std::vector<Rigid3d> Proposals(const Frame& frame, const CorrelationSeed& seed) const;
   // The tracker's alignment of `start` on the pyramid levels [finest, finest + num_levels)
   // of `images` (full resolution), score_iterations rounds per level
   // (Tracker::AlignLevels); the full alignment when `finest` is 0.
@@ -190,6 +193,7 @@ class Reacquisition {
   int quiet_slice_ = 0;
   Eigen::Vector3d sphere_centre_ = Eigen::Vector3d::Zero();
   double sphere_radius_ = 0.0;
+  Eigen::Vector3d box_min_, box_max_;  // the model's bounding box, object frame
 };
 
 }  // namespace unseen

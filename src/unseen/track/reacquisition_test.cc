@@ -169,6 +169,52 @@ TEST_F(Reacquire, ColourCorrelationFindsABlurredCubeBesideASharpLookAlike) {
   EXPECT_GT(miss_px(false), 5.0);
 }
 
+// A pose proposer (Tracker::SetPoseProposer; the view bank in select/) is asked for
+// orientations where the correlation finds the object, with the object's box there, and a
+// proposed orientation, placed at the seed, is tried: a cube back in view turned 50 degrees,
+// which the search's own turns (off here) would have to reach.
+TEST_F(Reacquire, AProposedOrientationIsTriedWhereTheCorrelationFindsTheObject) {
+  const Rigid3d back(ExpSO3(Eigen::Vector3d(0.0, 50.0 * kDeg, 0.0)) * CubePose().rotation(),
+                     CubePose().translation() + Eigen::Vector3d(0.12, 0.03, 0.0));
+  TrackerOptions options;
+  options.reacquisition.rotation_deg = 0.0;
+  std::vector<PixelRect> boxes;
+  auto frames_to_find = [&](bool with_proposer) {
+    Tracker tracker(rig_, cube_, options);
+    if (with_proposer) {
+      // The true orientation, somewhere else: the search places it at its seed.
+      tracker.SetPoseProposer([&](const Frame&, int camera, const PixelRect& box) {
+        EXPECT_EQ(camera, 0);
+        boxes.push_back(box);
+        return std::vector<Rigid3d>{
+            Rigid3d(back.rotation(), back.translation() + Eigen::Vector3d(0.3, 0.0, 0.2))};
+      });
+    }
+    TrackThenHide(&tracker, 4);
+    for (int k = 0; k < 6; ++k) {
+      const TrackResult r = tracker.Track({Image(back)});
+      const PoseDifference e = Difference(r.world_from_obj, back);
+      if (r.status == TrackStatus::kTracking && e.translation < 0.003 &&
+          e.rotation_rad < 1.0 * kDeg) {
+        return k;
+      }
+    }
+    return -1;
+  };
+  EXPECT_EQ(frames_to_find(false), -1);
+  const int found = frames_to_find(true);
+  EXPECT_GE(found, 0);
+  EXPECT_LE(found, 1);
+  // Asked with a box around where the cube is back.
+  ASSERT_FALSE(boxes.empty());
+  const Eigen::Vector2d centre = rig_.cameras[0].intrinsics.Project(back * centre_);
+  const PixelRect& box = boxes.back();
+  EXPECT_TRUE(centre.x() > box.x0 && centre.x() < box.x1 && centre.y() > box.y0 &&
+              centre.y() < box.y1)
+      << centre.transpose();
+  EXPECT_THROW(ParseTrackerOptions("reacquisition: {proposals: -1}\n"), Error);
+}
+
 // While lost, the same reference poses are correlated frame after frame: their templates
 // are rendered and transformed once, and the seeds are those found without the cache.
 TEST_F(Reacquire, RepeatedCorrelationsReuseTheirTemplateRenders) {

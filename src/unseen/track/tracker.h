@@ -83,6 +83,12 @@ struct SolveSummary {
   std::string BriefReport() const;
 };
 
+// Start poses of the model for the object whose silhouette's bounding box in camera
+// `camera` (rig index) of `frame` is about `box`: orientations the tracker's own search
+// does not reach (the view bank of select/known_model_pose.h). World frame, best first.
+using PoseProposer =
+    std::function<std::vector<Rigid3d>(const Frame& frame, int camera, const PixelRect& box)>;
+
 struct TrackResult {
   Rigid3d world_from_obj;  // the estimate (the held last good pose while lost)
   TrackStatus status = TrackStatus::kTracking;
@@ -175,6 +181,11 @@ class Tracker {
   // Whether it runs demoted (PhotometricOptions::dragged_weight, light_change_fit): at a
   // share of its weight, the silhouette judging the frames.
   bool photometric_demoted() const { return use_photometric_ && photometric_demoted_; }
+
+  // Where a lost frame's search finds the object by correlation (ReacquisitionOptions::
+  // proposals), the proposer's orientations there join its candidates; none by default.
+  void SetPoseProposer(PoseProposer proposer) { pose_proposer_ = std::move(proposer); }
+  const PoseProposer& pose_proposer() const { return pose_proposer_; }
 
   // The confidence of an alignment: what the modalities vouch for, times the plausibility
   // of the object's on-screen area (FailureOptions::min_area_ratio), judged against what
@@ -363,6 +374,7 @@ class Tracker {
   // The finest level of the last tracking alignment (PyramidOptions::max_finest_px).
   int finest_level_ = 0;
   std::unique_ptr<Reacquisition> reacquisition_;
+  PoseProposer pose_proposer_;
   // Running mean of the residual of the confident frames (FailureOptions); 0 = none yet.
   double residual_reference_px_ = 0.0;
   // Running mean of the region modality's residual in the confident frames; 0 = none yet.

@@ -135,6 +135,8 @@ void ReacquisitionOptions::Check() const {
                "reacquisition.rotation_deg {} must be in [0, 90]", rotation_deg);
   UNSEEN_CHECK(max_candidates >= 0 && max_candidates <= 100,
                "reacquisition.max_candidates {} must be in [0, 100]", max_candidates);
+  UNSEEN_CHECK(proposals >= 0 && proposals <= 32, "reacquisition.proposals {} must be in [0, 32]",
+               proposals);
   UNSEEN_CHECK(accept_coasted_score >= 0.0 && std::isfinite(accept_coasted_score),
                "reacquisition.accept_coasted_score {} must be >= 0 (above 1: never)",
                accept_coasted_score);
@@ -327,6 +329,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"max_seeds", YamlField(&re.max_seeds)},
         {"rotation_deg", YamlField(&re.rotation_deg)},
         {"max_candidates", YamlField(&re.max_candidates)},
+        {"proposals", YamlField(&re.proposals)},
         {"accept_coasted_score", YamlField(&re.accept_coasted_score)},
         {"turn_in_place", YamlField(&re.turn_in_place)},
         {"score_iterations", YamlField(&re.score_iterations)},

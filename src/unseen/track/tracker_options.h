@@ -259,6 +259,10 @@ struct ReacquisitionOptions {
   // each world axis through the object's centre, degrees; 0 = none.
   double rotation_deg = 25.0;
   int max_candidates = 12;         // start poses scored per lost frame, in priority order
+  // With a pose proposer (Tracker::SetPoseProposer), up to this many of its orientations,
+  // placed at the best correlation seed, are scored too (as the seeds are: in every search,
+  // quiet or not): an object that comes back into view turned further than rotation_deg.
+  int proposals = 4;
   // The coasted pose is scored first; at this coarse confidence or more it is refined at
   // once, and a refinement that re-acquires the object ends the search (the correlation
   // and the other candidates are skipped). > 1: never. (0.99 -> 0.5: the spider behind a

@@ -3,6 +3,8 @@
 // Helpers shared by the unit tests (GoogleTest); not part of the library proper.
 #pragma once
 
+#include <unistd.h>
+
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -14,12 +16,13 @@
 
 namespace unseen::testing {
 
-// A fresh, empty directory for the running test: <temp>/unseen_<prefix>_<suite>_<test>.
+// A fresh, empty directory for the running test: <temp>/unseen_<prefix>_<pid>_<suite>_<test>.
 inline std::filesystem::path TestDir(const std::string& prefix) {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() /
-      ("unseen_" + prefix + "_" + info->test_suite_name() + "_" + info->name());
+      ("unseen_" + prefix + "_" + std::to_string(::getpid()) + "_" + info->test_suite_name() +
+       "_" + info->name());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
