@@ -18,7 +18,6 @@ namespace unseen {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Gradient magnitude of the LINF-normalised (4.11), blurred image, the channels combined
 // in quadrature: a gain or a smooth shading of the input changes it little, and an edge
@@ -98,7 +97,6 @@ struct CameraWindow {
   PixelRect padded;        // level pixels the feature map covers (may exceed the image)
   cv::Mat feature;         // CorrelationFeature over `padded`, 0 outside the image
   cv::Scalar fill;         // mean colour of the window (the templates' background)
-  bool colour = false;     // the feature is the colour's
   // Correlates templates with `feature`, its transforms made once for all of them.
   std::shared_ptr<const MaskedTemplateMatcher> matcher;
 };
@@ -136,7 +134,6 @@ CameraWindow PrepareWindow(const cv::Mat& image, const RigCamera& rig_camera,
   }
   const cv::Mat window = DownsampledRegion(image, level, inside);
   w.fill = cv::mean(window);
-  w.colour = colour;
   cv::copyMakeBorder(CorrelationFeature(window, colour, preprocess, level), w.feature,
                      inside.y0 - w.padded.y0, w.padded.y1 - inside.y1, inside.x0 - w.padded.x0,
                      w.padded.x1 - inside.x1, cv::BORDER_CONSTANT, cv::Scalar::all(0));
@@ -217,7 +214,8 @@ CameraMatch MatchInWindow(const CameraWindow& w, const Mesh& model,
         }
       }
     }
-    const cv::Mat template_feature = CorrelationFeature(composite, w.colour, preprocess, level);
+    const bool colour = w.feature.channels() > 1;
+    const cv::Mat template_feature = CorrelationFeature(composite, colour, preprocess, level);
     // Compared over the object and its silhouette's blurred edge; the rest of the square
     // is background, unknown.
     cv::Mat mask;
@@ -441,19 +439,14 @@ Reacquisition::Reacquisition(Tracker* tracker) : tracker_(*tracker) {
   tracker_.model().BoundingSphere(&centre, &radius);
   sphere_centre_ = centre.cast<double>();
   sphere_radius_ = radius;
-  box_min_ = box_max_ = sphere_centre_;
-  for (const Eigen::Vector3f& v : tracker_.model().vertices) {
-    box_min_ = box_min_.cwiseMin(v.cast<double>());
-    box_max_ = box_max_.cwiseMax(v.cast<double>());
-  }
 }
 
 std::vector<Rigid3d> Reacquisition::Proposals(const Frame& frame, const CorrelationSeed& seed) const {
   const PoseProposer& proposer = tracker_.pose_proposer();
   const int wanted = tracker_.options().reacquisition.proposals;
   if (!proposer || wanted <= 0) return {};
-  // The object's box where the seed puts it, in the camera that sees it largest: the
-  // projection of the model's bounding box (the proposer takes its longer side).
+  // The object's box where the seed puts it (Tracker::ObjectRect), in the camera that sees
+  // it largest (the proposer takes its longer side).
   const Rig& rig = tracker_.rig();
   int camera = -1;
   PixelRect box;
@@ -462,29 +455,12 @@ std::vector<Rigid3d> Reacquisition::Proposals(const Frame& frame, const Correlat
         !seed.shift_px[c].allFinite()) {
       continue;
     }
-    const PinholeCamera& intrinsics = rig.cameras[c].intrinsics;
-    const Rigid3d cam_from_obj = rig.cameras[c].cam_from_world() * seed.world_from_obj;
-    double x0 = kInf, y0 = kInf, x1 = -kInf, y1 = -kInf;
-    for (int corner = 0; corner < 8; ++corner) {
-      const Eigen::Vector3d p((corner & 1) ? box_max_.x() : box_min_.x(),
-                              (corner & 2) ? box_max_.y() : box_min_.y(),
-                              (corner & 4) ? box_max_.z() : box_min_.z());
-      const Eigen::Vector3d in_cam = cam_from_obj * p;
-      if (!(in_cam.z() > 0.0)) return {};
-      const Eigen::Vector2d px = intrinsics.Project(in_cam);
-      x0 = std::min(x0, px.x());
-      y0 = std::min(y0, px.y());
-      x1 = std::max(x1, px.x());
-      y1 = std::max(y1, px.y());
-    }
-    const PixelRect rect =
-        PixelRect{static_cast<int>(std::floor(x0)), static_cast<int>(std::floor(y0)),
-                  static_cast<int>(std::ceil(x1)), static_cast<int>(std::ceil(y1))}
-            .Intersect(intrinsics.ImageRect());
-    if (rect.width() < 8 || rect.height() < 8) continue;
-    if (camera < 0 || rect.width() * rect.height() > box.width() * box.height()) {
+    const std::optional<PixelRect> rect = tracker_.ObjectRect(
+        rig.cameras[c].intrinsics, rig.cameras[c].cam_from_world() * seed.world_from_obj);
+    if (!rect || rect->width() < 8 || rect->height() < 8) continue;
+    if (camera < 0 || rect->width() * rect->height() > box.width() * box.height()) {
       camera = c;
-      box = rect;
+      box = *rect;
     }
   }
   if (camera < 0) return {};

@@ -193,7 +193,6 @@ class Reacquisition {
   int quiet_slice_ = 0;
   Eigen::Vector3d sphere_centre_ = Eigen::Vector3d::Zero();
   double sphere_radius_ = 0.0;
-  Eigen::Vector3d box_min_, box_max_;  // the model's bounding box, object frame
 };
 
 }  // namespace unseen

@@ -182,6 +182,11 @@ class Tracker {
   // share of its weight, the silhouette judging the frames.
   bool photometric_demoted() const { return use_photometric_ && photometric_demoted_; }
 
+  // The rectangle of `camera`'s pixels the object can cover at `cam_from_obj`: the
+  // bounding sphere's rectangle (3.5, (4.16)-(4.21)) cut down to the projection of the
+  // model's box, which is tighter for all but round objects. std::nullopt: out of view.
+  std::optional<PixelRect> ObjectRect(const PinholeCamera& camera,
+                                      const Rigid3d& cam_from_obj) const;
   // Where a lost frame's search finds the object by correlation (ReacquisitionOptions::
   // proposals), the proposer's orientations there join its candidates; none by default.
   void SetPoseProposer(PoseProposer proposer) { pose_proposer_ = std::move(proposer); }
@@ -265,11 +270,6 @@ class Tracker {
   // Whether a tracked frame's alignment shows the light changed under the model's own
   // colours (PhotometricOptions::light_change_fit); `has_depth`: the frame carries depth.
   bool LightChanged(const SolveSummary& summary, bool has_depth) const;
-  // The rectangle of `camera`'s pixels the object can cover at `cam_from_obj`: the
-  // bounding sphere's rectangle (3.5, (4.16)-(4.21)) cut down to the projection of the
-  // model's box, which is tighter for all but round objects. std::nullopt: out of view.
-  std::optional<PixelRect> ObjectRect(const PinholeCamera& camera,
-                                      const Rigid3d& cam_from_obj) const;
   // Renders the model into `work`'s region at `cam_from_obj` and composes the virtual image
   // (input with the render over it), its mask and depth; false when nothing was rendered.
   // Touches only `work` (cameras run in parallel).
