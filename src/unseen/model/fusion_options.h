@@ -48,6 +48,11 @@ struct ModelFusionOptions {
   // triangles, moving it by at most max_error_voxels voxels.
   int max_triangles = 2000;
   double max_error_voxels = 0.5;
+  // The fused surface must cover at least this share of what the build's own mesh covers in
+  // the build's image (both rendered at the build's pose): sparse or far depth (a sensor's
+  // holes, an object near its range) leaves the volume with a few scattered voxels whose
+  // surface is no model, and the build's own mesh, which spans its holes, is kept instead.
+  double min_coverage = 0.5;
   void Check() const;
 };
 

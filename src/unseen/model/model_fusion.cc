@@ -83,6 +83,15 @@ void KeepTexturedTriangles(double min_cos, Mesh* mesh) {
   mesh->ComputeNormals();
 }
 
+// Pixels of `camera`'s image the mesh covers at `cam_from_obj`.
+double CoveredPixels(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_from_obj) {
+  RenderOptions render;
+  render.write_color = false;
+  RenderBuffers buffers;
+  Render(mesh, camera, cam_from_obj, camera.ImageRect(), render, &buffers);
+  return buffers.mask.empty() ? 0.0 : static_cast<double>(cv::countNonZero(buffers.mask));
+}
+
 }  // namespace
 
 std::optional<Mesh> ModelFusion::Fuse(const ModelBuild& build, std::string* why) {
@@ -151,6 +160,19 @@ std::optional<Mesh> ModelFusion::Fuse(const ModelBuild& build, std::string* why)
   KeepTexturedTriangles(std::cos(75.0 * M_PI / 180.0), &mesh);
   if (mesh.triangles.empty()) {
     *why = "no key view sees the fused surface";
+    report_.fuse_ms = timer.ElapsedMilliseconds();
+    return std::nullopt;
+  }
+  // Sparse depth leaves a few scattered voxels: their surface, a fraction of what the
+  // build's own mesh covers in its image, is no model (ModelFusionOptions::min_coverage).
+  const double covered = CoveredPixels(mesh, reference_.intrinsics, cam_from_obj);
+  const double build_covers = CoveredPixels(*build.mesh, reference_.intrinsics, cam_from_obj);
+  report_.coverage = build_covers > 0.0 ? covered / build_covers : 0.0;
+  if (report_.coverage < options_.min_coverage) {
+    *why = fmt::format(
+        "the fused surface covers {:.0f} % of what the build's mesh covers in its image "
+        "({:.0f} of {:.0f} px; fusion.min_coverage {:.2f}): too little depth was fused",
+        100.0 * report_.coverage, covered, build_covers, options_.min_coverage);
     report_.fuse_ms = timer.ElapsedMilliseconds();
     return std::nullopt;
   }

@@ -33,6 +33,8 @@ struct FusionReport {
   int surface_triangles = 0;  // of the last extracted surface, before decimation
   int triangles = 0;          // of the last model
   float voxel_mm = 0.0f;
+  // Of the last model: what it covers in the build's image over what the build's mesh covers.
+  double coverage = 0.0;
   TsdfIntegration last;  // of the last map
   double fuse_ms = 0.0;  // of the last map: integration, extraction and key views
 };
@@ -45,7 +47,8 @@ class ModelFusion {
 
   // Folds in a successful build (its depth map, object mask, projector and object frame);
   // the first sizes the volume. Returns the fused model, or std::nullopt with `why` when
-  // the volume holds no surface yet (the build is still fused).
+  // the volume holds no surface yet or one covering too little of the build's view
+  // (ModelFusionOptions::min_coverage); the build is still fused.
   std::optional<Mesh> Fuse(const ModelBuild& build, std::string* why);
 
   const FusionReport& report() const { return report_; }

@@ -118,9 +118,35 @@ TEST_F(Fusion, PosesWithTrackingErrorsAverageOut) {
   EXPECT_LT(sum_off / model->num_vertices(), 0.0015);
 }
 
+TEST_F(Fusion, SparseDepthGivesNoFusedModelButTheBuildStands) {
+  // A far object or a sensor's holes: depth on a third of the pixels, at random. The
+  // build spans the holes with its triangulation; the volume gets scattered voxels whose
+  // surface is no model.
+  Frame frame = Image(20.0);
+  cv::Mat kept(frame.depths[0].size(), CV_8UC1);
+  cv::RNG random(3);
+  random.fill(kept, cv::RNG::UNIFORM, 0, 3);
+  frame.depths[0].setTo(0.0f, kept != 0);
+  const ModelBuild build = modeller_->Build(frame, Truth(20.0), PixelRect());
+  ASSERT_TRUE(build.ok()) << build.why;
+  ModelFusion fusion(rig_.cameras[0], 0.15, options_.fusion);
+  std::string why;
+  EXPECT_FALSE(fusion.Fuse(build, &why).has_value());
+  EXPECT_NE(why.find("fusion.min_coverage"), std::string::npos) << "[" << why << "]";
+  EXPECT_LT(fusion.report().coverage, options_.fusion.min_coverage);
+  EXPECT_GT(Iou(*build.mesh, 20.0), 0.6);  // what the tracker is handed instead
+  // Dense depth of the same view fuses into a model covering what the build covers.
+  ModelFusion dense(rig_.cameras[0], 0.15, options_.fusion);
+  ASSERT_TRUE(dense.Fuse(Build(20.0, Truth(20.0)), &why).has_value()) << why;
+  EXPECT_GT(dense.report().coverage, 0.9);
+}
+
 TEST_F(Fusion, BadOptionsAndFailedBuildsAreErrors) {
   ModelFusionOptions bad = options_.fusion;
   bad.max_key_views = 0;
+  EXPECT_THROW(bad.Check(), Error);
+  bad = options_.fusion;
+  bad.min_coverage = 1.5;
   EXPECT_THROW(bad.Check(), Error);
   bad = options_.fusion;
   bad.volume.voxels_per_side = 4;

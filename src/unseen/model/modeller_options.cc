@@ -164,6 +164,8 @@ void ModelFusionOptions::Check() const {
   UNSEEN_CHECK(max_triangles >= 4, "fusion.max_triangles {} must be >= 4", max_triangles);
   UNSEEN_CHECK(max_error_voxels >= 0.0 && max_error_voxels <= 10.0,
                "fusion.max_error_voxels {} must be in [0, 10]", max_error_voxels);
+  UNSEEN_CHECK(min_coverage >= 0.0 && min_coverage <= 1.0,
+               "fusion.min_coverage {} must be in [0, 1]", min_coverage);
 }
 
 void ModellerOptions::Check() const {
@@ -275,6 +277,7 @@ ModellerOptions FromYaml(const YAML::Node& root, const std::string& what, Modell
         {"key_view_spacing_deg", YamlField(&fu.key_view_spacing_deg)},
         {"max_key_views", YamlField(&fu.max_key_views)},
         {"latest_view", YamlField(&fu.latest_view)},
+        {"min_coverage", YamlField(&fu.min_coverage)},
         {"max_triangles", YamlField(&fu.max_triangles)},
         {"max_error_voxels", YamlField(&fu.max_error_voxels)}}},
   };
