@@ -61,6 +61,12 @@ System::System(const Rig& rig, int reference, std::optional<Mesh> model, Interes
   if (known_model_) {
     tracker_ = std::make_unique<Tracker>(rig_, std::move(*model), tracker_options_);
     poser_ = std::make_unique<KnownModelPoser>(tracker_.get(), options_.known_pose);
+    // A lost object found again by the re-acquisition's correlation is tried in the
+    // orientations of the views that match it there (Tracker::SetPoseProposer).
+    tracker_->SetPoseProposer(
+        [poser = poser_.get()](const Frame& frame, int camera, const PixelRect& box) {
+          return poser->Candidates(frame, camera, box);
+        });
   } else {
     modeller_ = std::make_unique<Modeller>(rig_, reference_, modeller_options);
   }
