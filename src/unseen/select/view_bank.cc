@@ -4,10 +4,12 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <opencv2/imgproc.hpp>
 
 #include "unseen/render/rasterizer.h"
 #include "unseen/util/error.h"
+#include "unseen/util/thread_pool.h"
 
 namespace unseen {
 namespace {
@@ -149,6 +151,7 @@ void ViewBankOptions::Check() const {
                "view bank: appearance_step {} not in (0, 100]", appearance_step);
   UNSEEN_CHECK(gradient_saturation > 0.0 && gradient_saturation <= 100.0,
                "view bank: gradient_saturation {} not in (0, 100]", gradient_saturation);
+  UNSEEN_CHECK(threads >= 0 && threads <= 256, "view bank: threads {} not in [0, 256]", threads);
 }
 
 std::vector<Eigen::Vector3d> FibonacciSphere(int n) {
@@ -179,22 +182,28 @@ ViewBank::ViewBank(const Mesh& model, const ViewBankOptions& options) : options_
   const Eigen::Vector2d principal(camera.cx, camera.cy);
 
   const int p = options_.patch_px;
-  const int max_views = options_.num_directions * options_.num_rolls;
+  const int rolls = options_.num_rolls;
+  const int max_views = options_.num_directions * rolls;
   for (ViewRows* m : {&step_right_, &step_down_, &outline_xx_, &outline_xy_, &outline_yy_}) {
     m->resize(max_views, p * p);
   }
-  views_.reserve(max_views);
-  RenderBuffers buffers;
-  for (const Eigen::Vector3d& towards : FibonacciSphere(options_.num_directions)) {
-    const Eigen::Matrix3d looking = LookingFrom(towards);
+  // View k of direction d fills row d * rolls + k; the directions render on the threads
+  // (each its own buffers), and the rows of views seen edge-on are squeezed out after.
+  std::vector<std::optional<View>> slots(max_views);
+  std::vector<float> slot_weights(max_views, 0.0f);
+  const std::vector<Eigen::Vector3d> directions = FibonacciSphere(options_.num_directions);
+  ThreadPool pool(options_.threads);
+  pool.ParallelFor(options_.num_directions, [&](int d) {
+    const Eigen::Matrix3d looking = LookingFrom(directions[d]);
     const Rigid3d cam_from_obj = Rigid3d::FromRotationMatrix(
         looking, Eigen::Vector3d(0, 0, render_distance_m_) - looking * sphere_centre_);
+    RenderBuffers buffers;
     Render(model, camera, cam_from_obj, camera.ImageRect(), RenderOptions{}, &buffers);
     const cv::Mat grey = Grey(buffers.color);
     cv::Mat coverage;
     buffers.mask.convertTo(coverage, CV_32F, 1.0 / 255.0);
-    for (int k = 0; k < options_.num_rolls; ++k) {
-      const double angle = 2.0 * kPi * k / options_.num_rolls;
+    for (int k = 0; k < rolls; ++k) {
+      const double angle = 2.0 * kPi * k / rolls;
       const cv::Mat turned_mask = TurnedAboutAxis(coverage, angle, principal, cv::INTER_LINEAR);
       cv::Mat on;
       cv::compare(turned_mask, 0.5, on, cv::CMP_GT);
@@ -205,13 +214,13 @@ ViewBank::ViewBank(const Mesh& model, const ViewBankOptions& options) : options_
       const cv::Mat mask_patch = CutSquare(turned_mask, box, p);
       cv::Mat grey_patch = CutSquare(turned_grey, box, p);
 
-      const int row = size();
+      const int row = d * rolls + k;
       View view;
       view.cam_from_obj_rotation = Eigen::Quaterniond(
           Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()) * Eigen::Quaterniond(looking));
       view.centre_offset_px = BoxCentre(box) - principal;
       view.side_px = BoxSide(box);
-      views_.push_back(view);
+      slots[row] = view;
 
       // Appearance: the steps inside the silhouette, summing to 1 in absolute value. A
       // uniform view (no texture) carries no appearance: all zero, score 0.
@@ -234,8 +243,20 @@ ViewBank::ViewBank(const Mesh& model, const ViewBankOptions& options) : options_
       StoreRow(gx.mul(gx).mul(inverse), row, &outline_xx_);
       StoreRow(2.0 * gx.mul(gy).mul(inverse), row, &outline_xy_);
       StoreRow(gy.mul(gy).mul(inverse), row, &outline_yy_);
-      outline_weight_.push_back(static_cast<float>(cv::sum(magnitude)[0]));
+      slot_weights[row] = static_cast<float>(cv::sum(magnitude)[0]);
     }
+  });
+  views_.reserve(max_views);
+  for (int row = 0; row < max_views; ++row) {
+    if (!slots[row]) continue;
+    const int kept = size();
+    if (kept != row) {
+      for (ViewRows* m : {&step_right_, &step_down_, &outline_xx_, &outline_xy_, &outline_yy_}) {
+        m->row(kept) = m->row(row);
+      }
+    }
+    views_.push_back(*slots[row]);
+    outline_weight_.push_back(slot_weights[row]);
   }
   UNSEEN_CHECK(!views_.empty(), "view bank: the model covers no pixel from any direction");
   for (ViewRows* m : {&step_right_, &step_down_, &outline_xx_, &outline_xy_, &outline_yy_}) {

@@ -53,6 +53,7 @@ struct ViewBankOptions {
   // Input gradient magnitude, times the square's mean, at which the silhouette cue counts
   // a gradient half as much as an infinitely strong one: g / (1 + |g| / s).
   double gradient_saturation = 0.3;
+  int threads = 0;  // the directions are rendered on this many threads; 0: every core
   void Check() const;
 };
 

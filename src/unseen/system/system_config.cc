@@ -74,6 +74,7 @@ YamlSection KnownPoseSection(KnownModelPoseOptions* o) {
           {"silhouette_weight", YamlField(&o->views.silhouette_weight)},
           {"appearance_step", YamlField(&o->views.appearance_step)},
           {"gradient_saturation", YamlField(&o->views.gradient_saturation)},
+          {"view_threads", YamlField(&o->views.threads)},
           {"max_candidates", YamlField(&o->max_candidates)},
           {"min_separation_deg", YamlField(&o->min_separation_deg)},
           {"min_confidence", YamlField(&o->min_confidence)},
