@@ -89,6 +89,13 @@ ObjectStart LocateUnknownObject(const UnknownObjectArgs& args, const Sequence& s
                  "the {}x{} image",
                  command, out.region.x0, out.region.y0, out.region.width(), out.region.height(),
                  camera.width, camera.height);
+    const double share = double(inside.width()) * inside.height() /
+                         (double(out.region.width()) * out.region.height());
+    UNSEEN_CHECK(share >= Modeller::kMinRegionInside,
+                 "{}: the object's region x {} y {} w {} h {} lies {:.0f} % outside the {}x{} "
+                 "image: an object cut by the image border cannot be modelled",
+                 command, out.region.x0, out.region.y0, out.region.width(), out.region.height(),
+                 100.0 * (1.0 - share), camera.width, camera.height);
     out.region = inside;
   }
   if (args.init == "gt") {

@@ -128,6 +128,7 @@ TEST_F(ModelCli, WhatCannotWorkFailsClearly) {
            Case{"track " + seq + " --unknown --init 0,0,1,0,0,0,1", "must be 'gt'"},
            Case{"model " + seq + " --frame 99 --init gt --out x.ply", "--frame 99"},
            Case{"model " + seq + " --roi 0,0,4,4 --out x.ply", "8x8"},
+           Case{"model " + seq + " --roi -60,-60,80,80 --out x.ply", "image border"},
            Case{"model " + seq + " --mask /nonexistent.png --out x.ply", "does not exist"},
        }) {
     const testing::CliResult r = RunCli(c.args);

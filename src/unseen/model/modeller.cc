@@ -12,7 +12,6 @@
 
 namespace unseen {
 
-
 Modeller::Modeller(const Rig& rig, int reference, const ModellerOptions& options)
     : rig_(rig), reference_(reference), options_(options) {
   options_.Check();
@@ -61,7 +60,20 @@ ModelBuild Modeller::Build(const Frame& frame, const Rigid3d& world_from_obj,
     }
     out.region = *sphere;
   }
+  const PixelRect given = out.region;
   out.region = out.region.Intersect(camera.ImageRect());
+  // A given region mostly beyond the image (kMinRegionInside); the bounding sphere's
+  // rectangle, which has slack, is not judged.
+  const double inside =
+      double(out.region.width()) * out.region.height() / (double(given.width()) * given.height());
+  if (!region.empty() && inside < kMinRegionInside) {
+    out.why = fmt::format(
+        "the object's region (x {} y {} w {} h {}) lies {:.0f} % outside the {}x{} reference "
+        "image: an object cut by the image border cannot be modelled",
+        given.x0, given.y0, given.width(), given.height(), 100.0 * (1.0 - inside), camera.width,
+        camera.height);
+    return out;
+  }
   if (out.region.width() < 8 || out.region.height() < 8) {
     out.why = "the object's region is smaller than 8x8 pixels in the reference image";
     return out;

@@ -83,6 +83,10 @@ struct ModelBuild {
 
 class Modeller {
  public:
+  // At least this share of a given region must lie within the reference image: one mostly
+  // beyond it is an object cut by the image border, whose border would be its outline.
+  static constexpr double kMinRegionInside = 0.5;
+
   // Throws unseen::Error for invalid options, a reference camera not in the rig, or a
   // depth source the rig cannot serve (DepthSource).
   Modeller(const Rig& rig, int reference, const ModellerOptions& options);

@@ -426,6 +426,13 @@ TEST_F(ModellerScene, WhatCannotBeModelledIsAStatusNotAnEmptyModel) {
   const Rigid3d aside(Eigen::Quaterniond::Identity(), Eigen::Vector3d(3, 0, 0.5));
   b = modeller.Build(s.frame, aside, PixelRect());
   EXPECT_FALSE(b.ok());
+  // A region mostly beyond the image's corner: an object cut by the border.
+  const PinholeCamera& reference = s.rig.cameras[0].intrinsics;
+  b = modeller.Build(s.frame, s.world_from_obj,
+                     PixelRect{reference.width - 20, reference.height - 20, reference.width + 40,
+                               reference.height + 40});
+  EXPECT_FALSE(b.ok());
+  EXPECT_NE(b.why.find("image border"), std::string::npos) << b.why;
   // A uniform image: no texture, so no depth from the cameras.
   Frame blank = s.frame;
   for (cv::Mat& im : blank.images) im = cv::Mat(im.size(), CV_32FC3, cv::Scalar(0.5, 0.5, 0.5));
