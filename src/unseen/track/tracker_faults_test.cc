@@ -353,8 +353,11 @@ TEST_F(HiddenTurningCube, ThatStoppedBehindAnOccluderIsLookedForTurnedInPlace) {
 // 6 on, noise growing by 0.006 a frame (intensity in [0, 1]) is added to the cube's pixels
 // only, so that its silhouette stays as it was. Returns the photometric reference residual
 // after `frames` frames, each of which must be tracked within 2 mm.
+// `noise_per_frame`: the noise added to the cube's texture grows by this (intensity in
+// [0, 1]) every frame from frame 6 on.
 double ReferenceWhileTheTextureDegrades(const TrackerOptions& options, int frames,
-                                        double* last_residual_px) {
+                                        double* last_residual_px, double noise_per_frame = 0.006,
+                                        bool expect_tracked = true) {
   MovingCube scene(testing::OneCameraRig());
   Tracker tracker(scene.rig(), scene.cube(), options);
   tracker.Initialize(CubeAt(0));
@@ -367,12 +370,15 @@ double ReferenceWhileTheTextureDegrades(const TrackerOptions& options, int frame
       Render(scene.cube(), camera.intrinsics, camera.cam_from_world() * CubeAt(k),
              camera.intrinsics.ImageRect(), RenderOptions(), &buffers);
       cv::Mat noise(image.size(), CV_32FC3);
-      rng.fill(noise, cv::RNG::NORMAL, cv::Scalar::all(0.0), cv::Scalar::all(0.006 * (k - 5)));
+      rng.fill(noise, cv::RNG::NORMAL, cv::Scalar::all(0.0),
+               cv::Scalar::all(noise_per_frame * (k - 5)));
       cv::Mat noisy = image + noise;
       noisy.copyTo(image, buffers.mask);
     }
     const TrackResult r = tracker.Track({image});
-    EXPECT_EQ(r.status, TrackStatus::kTracking) << "frame " << k << ": " << r.BriefReport();
+    if (expect_tracked) {
+      EXPECT_EQ(r.status, TrackStatus::kTracking) << "frame " << k << ": " << r.BriefReport();
+    }
     EXPECT_LT(ErrorMm(r, k), 2.0) << "frame " << k << ": " << r.BriefReport();
     *last_residual_px = r.summary.initial_residual_px;
   }
@@ -395,6 +401,24 @@ TEST(TrackerFaults, TextureThatFitsWorseIsLearntFasterWhileTheSilhouetteVouches)
   EXPECT_GT(last_slow, 1.1 * reference_slow);  // the floor rose: the slow reference lags
   EXPECT_GT(reference_vouched, 1.05 * reference_slow);
   EXPECT_LT(std::abs(last_vouched - reference_vouched), std::abs(last_slow - reference_slow));
+}
+
+TEST(TrackerFaults, ATextureFloorRisingFastIsFollowedWhileTheSilhouetteVouches) {
+  // The texture's fit worsens faster: a frame's residual soon exceeds good_residual_ratio
+  // times the reference. While the silhouette vouches the reference still follows it
+  // (FailureOptions::vouched_follow_ratio) and every frame is tracked; following only
+  // residuals within good_residual_ratio, the reference stops where the rise outran it.
+  TrackerOptions follows;
+  ASSERT_GT(follows.failure.vouched_follow_ratio, follows.failure.good_residual_ratio);
+  TrackerOptions stops = follows;
+  stops.failure.vouched_follow_ratio = stops.failure.good_residual_ratio;
+  double last_follows = 0.0, last_stops = 0.0;
+  const double reference_follows =
+      ReferenceWhileTheTextureDegrades(follows, 20, &last_follows, 0.012);
+  const double reference_stops =
+      ReferenceWhileTheTextureDegrades(stops, 20, &last_stops, 0.012, /*expect_tracked=*/false);
+  EXPECT_GT(last_stops, follows.failure.good_residual_ratio * reference_stops);
+  EXPECT_GT(reference_follows, 1.2 * reference_stops);
 }
 
 }  // namespace

@@ -85,6 +85,9 @@ void FailureOptions::Check() const {
   UNSEEN_CHECK(vouched_region_residual_ratio > 0.0 && std::isfinite(vouched_region_residual_ratio),
                "failure.vouched_region_residual_ratio {} must be > 0",
                vouched_region_residual_ratio);
+  UNSEEN_CHECK(vouched_follow_ratio >= good_residual_ratio && std::isfinite(vouched_follow_ratio),
+               "failure.vouched_follow_ratio {} must be >= good_residual_ratio = {}",
+               vouched_follow_ratio, good_residual_ratio);
   UNSEEN_CHECK(min_reference_residual_px > 0.0 && std::isfinite(min_reference_residual_px),
                "failure.min_reference_residual_px {} must be > 0", min_reference_residual_px);
   UNSEEN_CHECK(good_residual_px >= 0.0 && bad_residual_px > good_residual_px,
@@ -297,6 +300,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"residual_reference_rate", YamlField(&fa.residual_reference_rate)},
         {"vouched_reference_rate", YamlField(&fa.vouched_reference_rate)},
         {"vouched_region_residual_ratio", YamlField(&fa.vouched_region_residual_ratio)},
+        {"vouched_follow_ratio", YamlField(&fa.vouched_follow_ratio)},
         {"min_reference_residual_px", YamlField(&fa.min_reference_residual_px)},
         {"bad_residual_px", YamlField(&fa.bad_residual_px)},
         {"good_update_px", YamlField(&fa.good_update_px)},

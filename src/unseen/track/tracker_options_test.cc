@@ -165,6 +165,8 @@ TEST(TrackerOptions, RejectsBadFilesNamingTheKey) {
   EXPECT_NE(message("failure: {vouched_region_residual_ratio: 0}")
                 .find("failure.vouched_region_residual_ratio"),
             std::string::npos);
+  EXPECT_NE(message("failure: {vouched_follow_ratio: 1.1}").find("failure.vouched_follow_ratio"),
+            std::string::npos);
   EXPECT_NE(message("failure: {area_memory_frames: -2}").find("failure.area_memory_frames"),
             std::string::npos);
   EXPECT_NE(message("a: [").find("t.yaml"), std::string::npos);

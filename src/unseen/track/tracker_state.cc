@@ -185,7 +185,7 @@ TrackResult Tracker::Track(const Frame& input_frame) {
       follow(r.summary.region_residual, f.good_region_residual_ratio, f.residual_reference_rate,
              &region_residual_reference_);
     }
-    follow(residual, f.good_residual_ratio,
+    follow(residual, vouched ? f.vouched_follow_ratio : f.good_residual_ratio,
            vouched ? f.vouched_reference_rate : f.residual_reference_rate, &residual_reference_px_);
   }
   // The colour statistics learn from frames tracked with confidence by a plain alignment
