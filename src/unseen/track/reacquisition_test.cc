@@ -473,6 +473,42 @@ TEST_F(Reacquire, AnObjectThatLeftTheViewIsReacquiredWhenItComesBack) {
   EXPECT_LT(Difference(r.world_from_obj, back).translation, 0.003) << r.BriefReport();
 }
 
+TEST_F(Reacquire, AWrongTurnOfALookAlikeOutlineIsNotTakenBack) {
+  // Back 120 mm aside and turned 80 degrees about the vertical: a cube's outline fits at
+  // other orientations too, and some of its letters agree there. The search's pose, far
+  // from the truth, was taken back at confidence 0.78; its texture agrees on less than half
+  // of what it did while tracked (FailureOptions::recover_share_ratio), so the object stays
+  // lost. Without the check the wrong pose is reported as tracked.
+  // (The cube's letters coarser than the fixture's: 64 px a face.)
+  const Mesh cube = MakeLetteredCube(0.096, 64);
+  const Rigid3d start = CubePose();
+  const Rigid3d back(ExpSO3(Eigen::Vector3d(0.0, 80.0 * kDeg, 0.0)) * start.rotation(),
+                     start.translation() + Eigen::Vector3d(0.12, 0.03, 0.0));
+  const cv::Mat seen = Synthesize(cube, rig_.cameras[0], start, background_);
+  const cv::Mat turned = Synthesize(cube, rig_.cameras[0], back, background_);
+  for (const double ratio : {TrackerOptions().failure.recover_share_ratio, 0.0}) {
+    TrackerOptions options;
+    options.failure.recover_share_ratio = ratio;
+    Tracker tracker(rig_, cube, options);
+    tracker.Initialize(start);
+    for (int k = 0; k < 3; ++k) tracker.Track({seen});
+    EXPECT_GT(tracker.share_reference(), 0.9);
+    for (int k = 0; k < 4; ++k) tracker.Track({background_});
+    EXPECT_EQ(tracker.status(), TrackStatus::kLost);
+    int tracked_wrong = 0;
+    for (int k = 0; k < 3; ++k) {
+      const TrackResult r = tracker.Track({turned});
+      tracked_wrong += r.status == TrackStatus::kTracking &&
+                       Difference(r.world_from_obj, back).translation > 0.02;
+    }
+    if (ratio > 0.0) {
+      EXPECT_EQ(tracked_wrong, 0);
+    } else {
+      EXPECT_GT(tracked_wrong, 0);
+    }
+  }
+}
+
 TEST_F(Reacquire, AnObjectBackWhereItWasLostIsTakenAtTheCoastedPoseWithoutAFullSearch) {
   // Hidden for a while, then back where it was: the coasted pose scores at the top at the
   // coarse levels, its refinement re-acquires the object, and no other candidate is tried

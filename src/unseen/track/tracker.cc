@@ -175,6 +175,7 @@ void Tracker::SetModel(Mesh model) {
   residual_reference_px_ = 0.0;
   region_residual_reference_ = 0.0;
   area_reference_px_ = 0.0;
+  share_reference_ = 0.0;
 }
 
 Reacquisition& Tracker::Reacquirer() {
@@ -208,6 +209,7 @@ void Tracker::Initialize(const Rigid3d& world_from_obj) {
   residual_reference_px_ = 0.0;
   region_residual_reference_ = 0.0;
   area_reference_px_ = 0.0;
+  share_reference_ = 0.0;
   region_.Reset();
   StartWithGivenModel();
   learn_from_start_ = true;

@@ -175,6 +175,9 @@ class Tracker {
   // The photometric residual of the confident frames that the confidence judges a frame's
   // against (FailureOptions::residual_reference_rate), px; 0 before the first.
   double residual_reference_px() const { return residual_reference_px_; }
+  // The texture's share of the confident frames (FailureOptions::recover_share_ratio); 0
+  // before the first.
+  double share_reference() const { return share_reference_; }
   // Whether the photometric modality runs for the current model (PhotometricOptions:
   // enabled, require_appearance, and the first frame's min_start_fit check).
   bool photometric_in_use() const { return use_photometric_; }
@@ -270,6 +273,9 @@ class Tracker {
   // Whether a tracked frame's alignment shows the light changed under the model's own
   // colours (PhotometricOptions::light_change_fit); `has_depth`: the frame carries depth.
   bool LightChanged(const SolveSummary& summary, bool has_depth) const;
+  // A lost object's re-acquired pose whose texture agrees far less than it did while
+  // tracked (FailureOptions::recover_share_ratio), while the texture judges.
+  bool TextureDisowns(const SolveSummary& summary) const;
   // Renders the model into `work`'s region at `cam_from_obj` and composes the virtual image
   // (input with the render over it), its mask and depth; false when nothing was rendered.
   // Touches only `work` (cameras run in parallel).
@@ -381,6 +387,7 @@ class Tracker {
   double region_residual_reference_ = 0.0;
   // Running mean of the object's on-screen area in the confident frames, level-0 pixels; 0 = none.
   double area_reference_px_ = 0.0;
+  double share_reference_ = 0.0;
 };
 
 }  // namespace unseen

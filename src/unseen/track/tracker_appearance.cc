@@ -119,6 +119,7 @@ void Tracker::AdoptLiveAppearance(std::shared_ptr<const Mesh> live) {
   if (model_ == given_model_) {
     UNSEEN_LOG_DEBUG("tracker: the model takes its colours from the tracked frames");
     residual_reference_px_ = 0.0;  // the fit to the given colours says nothing of these
+    share_reference_ = 0.0;
   }
   model_ = std::move(live);
   use_photometric_ = true;

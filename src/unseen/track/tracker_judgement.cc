@@ -115,6 +115,16 @@ double Tracker::RegionResidualRatio(const SolveSummary& s) const {
          std::max(region_residual_reference_, options_.failure.min_reference_region_residual);
 }
 
+bool Tracker::TextureDisowns(const SolveSummary& s) const {
+  const double ratio = options_.failure.recover_share_ratio;
+  if (ratio <= 0.0 || share_reference_ <= 0.0 || !PhotometricJudges()) return false;
+  if (s.share >= ratio * share_reference_) return false;
+  UNSEEN_LOG_DEBUG("tracker: a re-acquired pose's texture agrees on {:.2f} of its pixels against "
+                   "{:.2f} while tracked: still lost",
+                   s.share, share_reference_);
+  return true;
+}
+
 bool Tracker::LightChanged(const SolveSummary& s, bool has_depth) const {
   const PhotometricOptions& po = options_.photometric;
   const RegionModalityOptions& ro = options_.region;

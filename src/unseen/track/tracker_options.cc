@@ -115,6 +115,8 @@ void FailureOptions::Check() const {
   UNSEEN_CHECK(recover_confidence >= lost_confidence && recover_confidence <= 1.0,
                "failure.recover_confidence {} must be in [lost_confidence = {}, 1]",
                recover_confidence, lost_confidence);
+  UNSEEN_CHECK(recover_share_ratio >= 0.0 && recover_share_ratio <= 1.0,
+               "failure.recover_share_ratio {} must be in [0, 1]", recover_share_ratio);
   UNSEEN_CHECK(lost_after_frames >= 1, "failure.lost_after_frames {} must be >= 1",
                lost_after_frames);
   UNSEEN_CHECK(coast_frames >= 0 && coast_frames <= 1000,
@@ -320,6 +322,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"lost_confidence", YamlField(&fa.lost_confidence)},
         {"lost_after_frames", YamlField(&fa.lost_after_frames)},
         {"recover_confidence", YamlField(&fa.recover_confidence)},
+        {"recover_share_ratio", YamlField(&fa.recover_share_ratio)},
         {"search_when_lost", YamlField(&fa.search_when_lost)},
         {"coast_frames", YamlField(&fa.coast_frames)},
         {"search_offset", YamlField(&fa.search_offset)}}},

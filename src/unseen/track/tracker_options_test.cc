@@ -167,6 +167,8 @@ TEST(TrackerOptions, RejectsBadFilesNamingTheKey) {
             std::string::npos);
   EXPECT_NE(message("failure: {vouched_follow_ratio: 1.1}").find("failure.vouched_follow_ratio"),
             std::string::npos);
+  EXPECT_NE(message("failure: {recover_share_ratio: 2}").find("failure.recover_share_ratio"),
+            std::string::npos);
   EXPECT_NE(message("failure: {area_memory_frames: -2}").find("failure.area_memory_frames"),
             std::string::npos);
   EXPECT_NE(message("a: [").find("t.yaml"), std::string::npos);

@@ -144,7 +144,7 @@ TrackResult Tracker::Track(const Frame& input_frame) {
       }
       last_good_ = r.world_from_obj;
     }
-  } else if (r.confidence >= f.recover_confidence) {
+  } else if (r.confidence >= f.recover_confidence && !TextureDisowns(r.summary)) {
     status_ = TrackStatus::kTracking;
     bad_frames_ = 0;
     predictor_->Reset(r.world_from_obj);
@@ -158,6 +158,12 @@ TrackResult Tracker::Track(const Frame& input_frame) {
   // re-acquired pose by the same floor.
   const double residual = r.summary.initial_residual_px;
   if (status_ == TrackStatus::kTracking && r.confidence >= f.recover_confidence) {
+    if (r.summary.share > 0.0) {
+      share_reference_ = share_reference_ > 0.0
+                             ? share_reference_ + f.residual_reference_rate *
+                                                      (r.summary.share - share_reference_)
+                             : r.summary.share;
+    }
     // The object's on-screen area follows the confident frames (FailureOptions::
     // min_area_ratio).
     if (r.summary.object_px > 0.0) {
