@@ -89,8 +89,7 @@ ObjectStart LocateUnknownObject(const UnknownObjectArgs& args, const Sequence& s
                  "the {}x{} image",
                  command, out.region.x0, out.region.y0, out.region.width(), out.region.height(),
                  camera.width, camera.height);
-    const double share = double(inside.width()) * inside.height() /
-                         (double(out.region.width()) * out.region.height());
+    const double share = Modeller::ShareInside(out.region, camera);
     UNSEEN_CHECK(share >= Modeller::kMinRegionInside,
                  "{}: the object's region x {} y {} w {} h {} lies {:.0f} % outside the {}x{} "
                  "image: an object cut by the image border cannot be modelled",

@@ -64,8 +64,7 @@ ModelBuild Modeller::Build(const Frame& frame, const Rigid3d& world_from_obj,
   out.region = out.region.Intersect(camera.ImageRect());
   // A given region mostly beyond the image (kMinRegionInside); the bounding sphere's
   // rectangle, which has slack, is not judged.
-  const double inside =
-      double(out.region.width()) * out.region.height() / (double(given.width()) * given.height());
+  const double inside = ShareInside(given, camera);
   if (!region.empty() && inside < kMinRegionInside) {
     out.why = fmt::format(
         "the object's region (x {} y {} w {} h {}) lies {:.0f} % outside the {}x{} reference "

@@ -86,6 +86,11 @@ class Modeller {
   // At least this share of a given region must lie within the reference image: one mostly
   // beyond it is an object cut by the image border, whose border would be its outline.
   static constexpr double kMinRegionInside = 0.5;
+  // The share of `region`'s area within `camera`'s image (0 for an empty region).
+  static double ShareInside(const PixelRect& region, const PinholeCamera& camera) {
+    return region.empty() ? 0.0
+                          : double(region.Intersect(camera.ImageRect()).area()) / region.area();
+  }
 
   // Throws unseen::Error for invalid options, a reference camera not in the rig, or a
   // depth source the rig cannot serve (DepthSource).
