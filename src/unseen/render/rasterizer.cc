@@ -614,7 +614,8 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
   // Colour mode: texture coordinates interpolated directly when every material is
   // textured (one texture lookup per pixel, no per-triangle work), else barycentric
   // coordinates resolved per triangle.
-  const bool uv_mode = options.write_color && !options.write_normals && mesh.projectors.empty() &&
+  const bool uv_mode = options.write_color && !options.write_normals && !options.shade_quads &&
+                       mesh.projectors.empty() &&
                        !mesh.uvs.empty() && !mesh.materials.empty() &&
                        std::all_of(mesh.materials.begin(), mesh.materials.end(),
                                    [](const Material& m) { return !m.texture.empty(); });
@@ -685,8 +686,10 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
     const cv::Mat& texture = mesh.materials[m].texture;
     textures.push_back(texture);
     if (!mipmaps || texture.empty() || !(stats.pixels[m] > 0.0)) continue;
+    // Shaded once per 2x2 block, a sample stands for four pixels' texels.
     const double texels_per_pixel = stats.texels[m] * stats.texture_size[m] /
-                                    (stats.pixels[m] / double(kSubpixel * kSubpixel));
+                                    (stats.pixels[m] / double(kSubpixel * kSubpixel)) *
+                                    (options.shade_quads ? 4.0 : 1.0);
     if (MipmapLevelFor(texels_per_pixel, kMaxMipmapLevels) == 0) continue;
     const std::vector<cv::Mat> levels = MipmapLevels(texture);
     textures.back() = levels[MipmapLevelFor(texels_per_pixel, int(levels.size()))];
@@ -713,7 +716,7 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
                         ? std::min(options.pool->size(), size.height)
                         : 1;
   // Colour once per 2x2 block one triangle covers whole (bands of whole blocks).
-  const bool quads = options.shade_quads && options.write_color && !uv_mode;
+  const bool quads = options.shade_quads && options.write_color;
   auto band_row = [&](int band) {
     return quads ? 2 * ((size.height / 2) * band / bands) + (band == bands ? size.height % 2 : 0)
                  : size.height * band / bands;

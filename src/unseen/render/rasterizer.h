@@ -55,8 +55,9 @@ struct RenderOptions {
   // Shade a 2x2 block of pixels that one triangle covers whole once, at its centre, and
   // give its four pixels that colour: for a render that is area-averaged to half its
   // resolution afterwards (a supersampled image), where the block becomes one pixel and its
-  // four samples would average about that colour. About 4x fewer texture lookups. Not for
-  // models of UV textures alone (their lookups are cheap), nor for normals or depth.
+  // four samples would average about that colour. About 4x fewer texture lookups; a UV
+  // texture is then sampled from the mip-map level of the block (a large photo texture's
+  // lookups miss the cache: the real cube's render 3.4 -> 3.0 ms a frame). Colour only.
   bool shade_quads = false;
   double near_m = 1e-3;            // near clipping distance, metres (> 0)
   // Runs the shading pass's rows on these threads (regions of 8 192 pixels or more); null:
