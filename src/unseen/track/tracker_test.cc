@@ -103,9 +103,11 @@ TEST_F(TrackerScene, StartingAtTheTruthStaysThere) {
   for (int levels : {1, 2, 3}) {
     const TrackResult r = tracker.Align({image_}, truth_, levels);
     const PoseDifference e = Difference(r.world_from_obj, truth_);
-    // 0.2 mm at 1 m is 0.03 px of scale on the ~140 px cube.
+    // 0.2 mm at 1 m is 0.03 px of scale on the ~140 px cube. The tracker shades each 2x2
+    // block of its render once, from the block's mip-map level, where this image averages
+    // four lookups: the texture is a little softer than here (0.07-0.08 deg).
     EXPECT_LT(e.translation, 2e-4) << levels << " levels: " << r.BriefReport();
-    EXPECT_LT(e.rotation_rad, 0.05 * kDeg) << levels << " levels: " << r.BriefReport();
+    EXPECT_LT(e.rotation_rad, 0.1 * kDeg) << levels << " levels: " << r.BriefReport();
     EXPECT_GT(r.confidence, 0.9);
     EXPECT_EQ(r.summary.num_levels, levels);
   }
