@@ -10,20 +10,23 @@
 namespace unseen {
 
 void TransferShading(const cv::Mat& input_roi, const PreprocessOptions& options, int level,
-                     VirtualImage* out) {
+                     const cv::Rect& rendered, VirtualImage* out) {
   VirtualImage& w = *out;
+  const cv::Rect inside = rendered & cv::Rect(0, 0, w.composite.cols, w.composite.rows);
   // Low-pass of input and render over the fully covered pixels only (so the background
   // does not leak in); their ratio is the shading the model lacks. The ratio is formed at
   // the low-pass's coarse scale and only it is up-sampled.
+  // Outside `rendered` nothing is covered: zero weight there.
   const int width = w.composite.cols, height = w.composite.rows;
-  cv::Mat real(height, width, CV_32FC4), model(height, width, CV_32FC3);
-  for (int y = 0; y < height; ++y) {
+  cv::Mat real(height, width, CV_32FC4, cv::Scalar::all(0.0)),
+      model(height, width, CV_32FC3, cv::Scalar::all(0.0));
+  for (int y = inside.y; y < inside.y + inside.height; ++y) {
     const uint8_t* cov = w.coverage.ptr<uint8_t>(y);
     const float* in = input_roi.ptr<float>(y);
     const float* co = w.composite.ptr<float>(y);
     float* r = real.ptr<float>(y);
     float* m = model.ptr<float>(y);
-    for (int x = 0; x < width; ++x) {
+    for (int x = inside.x; x < inside.x + inside.width; ++x) {
       const float weight = cov[x] == 4 ? 1.0f : 0.0f;
       for (int k = 0; k < 3; ++k) {
         r[4 * x + k] = weight * in[3 * x + k];
@@ -52,11 +55,11 @@ void TransferShading(const cv::Mat& input_roi, const PreprocessOptions& options,
     }
   }
   const cv::Mat gain = LowPassUp(gain_low, w.composite.size(), factor);
-  for (int y = 0; y < height; ++y) {
+  for (int y = inside.y; y < inside.y + inside.height; ++y) {
     const uint8_t* cov = w.coverage.ptr<uint8_t>(y);
     const float* g = gain.ptr<float>(y);
     float* out = w.composite.ptr<float>(y);
-    for (int x = 0; x < width; ++x) {
+    for (int x = inside.x; x < inside.x + inside.width; ++x) {
       if (!cov[x]) continue;
       for (int k = 0; k < 3; ++k) out[3 * x + k] *= g[3 * x + k];
     }
@@ -94,7 +97,7 @@ bool ComposeVirtualImage(const Mesh& model, const PinholeCamera& camera,
     w.coverage.create(height, width, CV_8UC1);
     w.coverage.setTo(0);
     w.coverage.setTo(4, w.mask);
-    if (options.shading_transfer) TransferShading(input_roi, options, level, &w);
+    if (options.shading_transfer) TransferShading(input_roi, options, level, sub, &w);
     *compose_ms += timer.ElapsedMilliseconds();
     return true;
   }
@@ -155,12 +158,13 @@ bool ComposeVirtualImage(const Mesh& model, const PinholeCamera& camera,
       }
     }
   }
-  if (options.shading_transfer) TransferShading(input_roi, options, level, &w);
+  const cv::Rect rendered(ox, oy, rw, rh);
+  if (options.shading_transfer) TransferShading(input_roi, options, level, rendered, &w);
   const float gamma = static_cast<float>(options.silhouette_gamma);
-  for (int y = 0; y < height; ++y) {
+  for (int y = oy; y < oy + rh; ++y) {  // partly covered pixels lie inside the render
     const uint8_t* cov = w.coverage.ptr<uint8_t>(y);
     float* out = w.composite.ptr<float>(y);
-    for (int x = 0; x < width; ++x) {
+    for (int x = ox; x < ox + rw; ++x) {
       const int n = cov[x];
       if (n == 0 || n == 4) continue;
       float bg[3] = {0, 0, 0};

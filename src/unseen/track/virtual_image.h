@@ -42,7 +42,8 @@ bool ComposeVirtualImage(const Mesh& model, const PinholeCamera& camera,
 
 // Multiplies the rendered colour of `out`'s composite by the low-frequency ratio of input to
 // render over the fully covered pixels (PreprocessOptions::shading_transfer at `level`).
+// `rendered`: the part of the region the render covers pixels of (none outside it).
 void TransferShading(const cv::Mat& input_roi, const PreprocessOptions& options, int level,
-                     VirtualImage* out);
+                     const cv::Rect& rendered, VirtualImage* out);
 
 }  // namespace unseen
