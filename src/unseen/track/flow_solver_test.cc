@@ -1,7 +1,9 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/track/flow_solver.h"
 
+#include <algorithm>
 #include <random>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -265,6 +267,31 @@ TEST(FlowSolver, TrimmedRmsLeavesOutTheLargestResiduals) {
   EXPECT_THROW(m.TrimmedRms(0.0), Error);
   EXPECT_THROW(m.TrimmedRms(1.5), Error);
   EXPECT_EQ(ModalityEquations().TrimmedRms(0.9), 0.0);
+}
+
+TEST(FlowSolver, RobustSigmaIsTheMedianOfItsSpread) {
+  // The radix selection must give exactly the median std::nth_element gives, over ties,
+  // zeros, tiny and huge magnitudes and every size up to the 1 024 it samples (and beyond,
+  // where it takes every k-th value).
+  std::mt19937 rng(5);
+  std::lognormal_distribution<float> spread(-2.0f, 3.0f);
+  for (int n : {1, 2, 3, 7, 64, 1000, 1023, 1024, 1025, 5000}) {
+    for (int trial = 0; trial < 20; ++trial) {
+      std::vector<float> values(n);
+      for (float& v : values) v = trial % 3 == 0 ? float(rng() % 4) : spread(rng);
+      if (trial % 5 == 1) values[n / 2] = 0.0f;
+      const size_t stride = (values.size() + 1023) / 1024;
+      std::vector<float> kept;
+      for (size_t i = 0; i < values.size(); i += stride) kept.push_back(values[i]);
+      std::nth_element(kept.begin(), kept.begin() + kept.size() / 2, kept.end());
+      const double expected = 1.4826 * kept[kept.size() / 2];
+      EXPECT_EQ(RobustSigma(&values), expected) << "n " << n << " trial " << trial;
+    }
+  }
+  std::vector<float> signed_values = {-3.0f, 1.0f, -0.5f, 2.0f, 0.25f};  // not magnitudes
+  EXPECT_EQ(RobustSigma(&signed_values), 1.4826 * 0.25f);
+  std::vector<float> none;
+  EXPECT_EQ(RobustSigma(&none), 0.0);
 }
 
 TEST(FlowSolver, OptionsCheck) {
