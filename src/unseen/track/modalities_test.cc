@@ -483,6 +483,34 @@ TEST_F(ModalityScene, DepthJudgesWhereTheSilhouettesColoursCannot) {
   EXPECT_LT(far.confidence, TrackerOptions().failure.lost_confidence) << far.BriefReport();
 }
 
+TEST_F(ModalityScene, AFewSilhouetteLinesFarOffTheirContourAreNotOutvotedByTheSilentOnes) {
+  // The untextured cube tracked with depth at the true pose; then the same frame's summary
+  // as if only 30 % of the silhouette's lines had given rows (the others' colours silent,
+  // which lets the depth judge in their place), those disagreeing with the learnt colours
+  // and 10x as far off their contour as the confident frames' were. The lines that spoke
+  // contradict the pose: the silent ones no longer outvote them, though the depth agrees.
+  Tracker tracker(rig_, flat_);
+  tracker.Initialize(truth_);
+  TrackResult r;
+  for (int k = 0; k < 4; ++k) r = tracker.Track(frame_);
+  ASSERT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
+  ASSERT_GT(r.summary.region_residual, 0.0) << r.BriefReport();
+  ASSERT_GT(r.summary.depth_counts.Agreement(TrackerOptions().depth),
+            TrackerOptions().depth.good_agreement)
+      << r.BriefReport();
+  SolveSummary few_speak = r.summary;
+  RegionCounts& lines = few_speak.region_counts;
+  lines.used = lines.lines * 3 / 10;
+  lines.agreeing = lines.pixels / 2;
+  ASSERT_GE(lines.used, TrackerOptions().failure.min_region_lines);
+  SolveSummary few_far_off = few_speak;
+  few_far_off.region_residual *= 10.0;
+  // On their contour, the few lines' disagreement is their colours' (0.7 = 1 - 0.3).
+  EXPECT_NEAR(tracker.Confidence(few_speak), 0.7, 0.01) << r.BriefReport();
+  EXPECT_LT(tracker.Confidence(few_far_off), TrackerOptions().failure.lost_confidence)
+      << r.BriefReport();
+}
+
 // The flat cube rendered at CubePose() in one camera, and the depth modality's input for a
 // measured depth image of it.
 struct DepthScene {

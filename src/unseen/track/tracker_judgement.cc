@@ -68,14 +68,16 @@ double Tracker::ModalityConfidence(const SolveSummary& s, bool with_references) 
   // guard it, it also vouches for a frame whose texture says little (motion blur). Measured
   // depth, when there is some, must agree in every case.
   double region_term = 0.0;
+  double agreement_term = 0.0, residual_term = 1.0;  // region_term's two factors
   const double region_agreement = s.region_counts.Agreement();
   if (region_agreement >= 0.0 && s.region_counts.used >= f.min_region_lines) {
-    region_term =
+    agreement_term =
         Ramp(region_agreement, options_.region.bad_agreement, options_.region.good_agreement);
     if (with_references && region_residual_reference_ > 0.0) {
-      region_term *= Ramp(RegionResidualRatio(s), f.bad_region_residual_ratio,
-                          f.good_region_residual_ratio);
+      residual_term = Ramp(RegionResidualRatio(s), f.bad_region_residual_ratio,
+                           f.good_region_residual_ratio);
     }
+    region_term = agreement_term * residual_term;
   }
   double photometric =
       PhotometricJudges() ? PhotometricFit(s, with_references, region_term) : 0.0;
@@ -100,11 +102,15 @@ double Tracker::ModalityConfidence(const SolveSummary& s, bool with_references) 
   // The silhouette judges only as far as its colours tell the object from its surroundings:
   // lines whose colours do not (too little contrast, an unsure contour) gave no row. Where
   // few did (a white object on white paper), its low agreement is its colours', not a
-  // contradiction, and the measured depth judges in its place.
+  // contradiction, and the measured depth judges in its place. Not so a contour the lines
+  // that did give rows find far off (the residual against the confident frames'): those
+  // contradict the pose whatever the others say (the real cube every third frame: 110 mm
+  // off, 61 of 200 lines used at 10x their residual, the texture agreeing on 1 % of its
+  // pixels, the depth on the part not hidden, was reported tracking at 0.70).
   double silhouette = region_term;
   if (s.region_counts.lines > 0) {
     const double informative = double(s.region_counts.used) / double(s.region_counts.lines);
-    silhouette = 1.0 - informative * (1.0 - region_term);
+    silhouette = residual_term * (1.0 - informative * (1.0 - agreement_term));
   }
   return depth_term * std::max(photometric, silhouette);
 }
