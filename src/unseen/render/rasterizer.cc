@@ -612,8 +612,8 @@ void Render(const Mesh& mesh, const PinholeCamera& camera, const Rigid3d& cam_fr
   out->depth.setTo(0.0f);
   out->mask.create(size, CV_8UC1);
   // Colour mode: texture coordinates interpolated directly when every material is
-  // textured (one texture lookup per pixel, no per-triangle work), else barycentric
-  // coordinates resolved per triangle.
+  // textured and each sample is shaded (one texture lookup per pixel, no per-triangle
+  // work), else barycentric coordinates resolved per triangle.
   const bool uv_mode = options.write_color && !options.write_normals && !options.shade_quads &&
                        mesh.projectors.empty() &&
                        !mesh.uvs.empty() && !mesh.materials.empty() &&

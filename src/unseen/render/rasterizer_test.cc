@@ -749,6 +749,51 @@ TEST(Rasterizer, QuadShadingColoursEachWholeBlockOnceAndTheRestPerSample) {
   EXPECT_EQ(cv::norm(each.color, quads.color, cv::NORM_INF), 0.0);
 }
 
+TEST(Rasterizer, QuadShadingOfAUvTextureSamplesTheBlocksMipmapLevel) {
+  // A one-texel checkerboard at one texel per pixel: shaded per sample it is read from its
+  // full-resolution level, each sample black, white or between as it falls; shaded once per
+  // 2x2 block, a lookup stands for four pixels' texels and comes from the next level, where
+  // the checker has averaged to grey, as the mean of the block's four samples about is.
+  const PinholeCamera cam = TestCamera();
+  const int side = 64;
+  Mesh quad = MakeScreenQuad(cam, 40.5, 28.5, 40.5 + side, 28.5 + side, 1.0);
+  quad.uvs = {{0, 1}, {0, 0}, {1, 0}, {1, 1}};
+  Material material;
+  material.texture.create(side, side, CV_32FC3);
+  for (int y = 0; y < side; ++y) {
+    for (int x = 0; x < side; ++x) {
+      material.texture.at<cv::Vec3f>(y, x) = (x + y) % 2 ? cv::Vec3f(1, 1, 1) : cv::Vec3f(0, 0, 0);
+    }
+  }
+  quad.materials = {material};
+  // Turned in its plane so that samples fall anywhere between texel centres.
+  const Eigen::Vector3d centre(0.0, 0.0, 1.0);
+  const auto rotation = ExpSO3(Eigen::Vector3d(0.0, 0.0, 0.3));
+  const Rigid3d turn(rotation, centre - rotation * centre);
+  RenderOptions options;
+  RenderBuffers each, quads;
+  Render(quad, cam, turn, cam.ImageRect(), options, &each);
+  options.shade_quads = true;
+  Render(quad, cam, turn, cam.ImageRect(), options, &quads);
+  EXPECT_EQ(cv::countNonZero(each.mask != quads.mask), 0);
+  int whole = 0;
+  double spread_each = 0.0;
+  for (int y = 0; y + 1 < cam.height; y += 2) {
+    for (int x = 0; x + 1 < cam.width; x += 2) {
+      if (cv::countNonZero(quads.mask(cv::Rect(x, y, 2, 2))) < 4) continue;
+      ++whole;
+      const cv::Vec3f block = quads.color.at<cv::Vec3f>(y, x);
+      for (int k = 0; k < 4; ++k) {
+        ASSERT_EQ(quads.color.at<cv::Vec3f>(y + k / 2, x + k % 2), block) << x << " " << y;
+        spread_each += std::abs(each.color.at<cv::Vec3f>(y + k / 2, x + k % 2)[0] - 0.5f);
+      }
+      ASSERT_NEAR(block[0], 0.5f, 0.02f) << x << " " << y;
+    }
+  }
+  ASSERT_GT(whole, 500);
+  EXPECT_GT(spread_each / (4.0 * whole), 0.1);  // the samples themselves are far from grey
+}
+
 TEST(Rasterizer, AProjectorsDepthHidesTheSurfaceBehindWhatItSaw) {
   // Two parallel quads, the near one covering the left half of the far one as the
   // projector sees them. Seen from the side, the far quad's hidden part must not take the
