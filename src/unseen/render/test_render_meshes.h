@@ -15,6 +15,7 @@
 
 namespace unseen::render_testing {
 
+// A small camera with unequal focal lengths and its principal point off the centre.
 inline PinholeCamera TestCamera(int width = 160, int height = 120) {
   PinholeCamera c;
   c.width = width;
