@@ -735,6 +735,55 @@ TEST(RegionModality, LinesAcrossAnOccluderAreLeftOut) {
   EXPECT_EQ(off.occluded, 0);
 }
 
+// A square object before a background of nearly its colour, its histograms learnt; then a
+// look-alike band (a shade darker, in the object's colour bins) right behind its right
+// edge. Those lines' colours run the contour out onto the band, while the image's largest
+// step stays on the rendered contour: with RegionModalityOptions::edge_contradiction_px
+// they give no row, and the rest sit on the contour.
+TEST(RegionModality, LinesWhoseColoursLeaveTheImagesEdgeGiveNoRow) {
+  const int size = 96;
+  const cv::Vec3f object(0.56f, 0.56f, 0.56f), look_alike(0.505f, 0.505f, 0.505f),
+      background(0.49f, 0.49f, 0.49f);
+  cv::Mat image(size, size, CV_32FC3, background);
+  cv::Mat mask = cv::Mat::zeros(size, size, CV_8UC1);
+  const cv::Rect square(24, 24, 48, 48);
+  image(square).setTo(object);
+  mask(square).setTo(255);
+  cv::Mat depth(size, size, CV_32FC1, cv::Scalar(0.0f));
+  depth.setTo(1.0f, mask);
+  RegionModalityOptions options;
+  ColorHistograms histograms(options.bins_per_channel);
+  RegionModalityInput in;
+  in.image = &image;
+  in.mask = &mask;
+  in.rendered_depth = &depth;
+  in.roi = PixelRect{0, 0, size, size};
+  in.camera = PinholeCamera::Centered(size, size, 100.0);
+  in.origin_in_cam = Eigen::Vector3d(0.0, 0.0, 1.0);
+  FlowEquations ignored;
+  RegionCounts learnt;
+  AddRegionEquations(in, options, /*learn=*/true, &histograms, &ignored, &learnt);
+  histograms.Commit(1.0);
+  ASSERT_TRUE(histograms.learnt());
+  ASSERT_GT(histograms.Posterior(histograms.Bin(&look_alike[0])), 0.5f);
+  image(cv::Rect(square.x + square.width, 16, 9, 64)).setTo(look_alike);
+
+  auto largest_offset = [&](double contradiction_px, RegionCounts* counts) {
+    options.edge_contradiction_px = contradiction_px;
+    FlowEquations rows;
+    AddRegionEquations(in, options, /*learn=*/false, &histograms, &rows, counts);
+    float largest = 0.0f;
+    for (float b : rows.rhs) largest = std::max(largest, std::abs(b));
+    return largest;
+  };
+  RegionCounts off, on;
+  EXPECT_GT(largest_offset(0.0, &off), 6.0f);
+  EXPECT_LT(largest_offset(6.0, &on), 1.5f);
+  EXPECT_LT(on.used, off.used);
+  EXPECT_GT(on.used, off.used / 2);
+  EXPECT_THROW(ParseTrackerOptions("region: {edge_contradiction_px: -1}\n"), Error);
+}
+
 // The textured cube at rest, half hidden by a plate that covers its right part and contour
 // (then also crossed by thin rods the texture's blocks miss). The occluder's blocks leave little of the texture in use, so the texture alone
 // vouches weakly; the silhouette, which skips the lines across the plate and sits on the

@@ -21,6 +21,8 @@ void RegionModalityOptions::Check() const {
                "region.learn_margin_px {} must be in [0, line_px = {})", learn_margin_px, line_px);
   UNSEEN_CHECK(learn_rate > 0.0 && learn_rate <= 1.0, "region.learn_rate {} must be in (0, 1]",
                learn_rate);
+  UNSEEN_CHECK(edge_contradiction_px >= 0.0 && std::isfinite(edge_contradiction_px),
+               "region.edge_contradiction_px {} must be >= 0 (0: off)", edge_contradiction_px);
   UNSEEN_CHECK(min_sigma_px > 0.0 && min_sigma_px < max_sigma_px,
                "region: need 0 < min_sigma_px ({}) < max_sigma_px ({})", min_sigma_px,
                max_sigma_px);
@@ -310,6 +312,10 @@ void AddRegionEquations(const RegionModalityInput& in, const RegionModalityOptio
     variance /= sum;
     const double sigma = std::max(std::sqrt(variance), options.min_sigma_px);
     if (sigma > options.max_sigma_px || contrast < options.min_contrast) continue;
+    if (options.edge_contradiction_px > 0.0 && largest_step > 0.0 &&
+        std::abs(step_at - half) <= 1 && std::abs(mean) > options.edge_contradiction_px) {
+      continue;
+    }
     const float z = depth.ptr<float>(cs.y)[cs.x];
     if (!(z > 0.0f)) continue;
     // Flow row with the unit normal as the "gradient", scaled by 1 / sigma: its residual

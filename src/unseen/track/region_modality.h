@@ -49,6 +49,11 @@ struct RegionModalityOptions {
   // should be and pulls the contour in, and it would teach the histograms the occluder.
   bool skip_occluded_lines = true;
   int occluded_probe_px = 3;
+  // A line whose largest colour step lies on the rendered contour (within a pixel) while
+  // its colours place the contour further than this away gives no row (0: off): the image
+  // has the object's edge where the pose puts it, and what lies beyond looks like the
+  // object (a look-alike behind it), so the colours would pull the contour onto it.
+  double edge_contradiction_px = 0.0;
   // Robust kernel, scales and weight against the other modalities (residuals: contour
   // offsets over their standard deviation). Half weight: beside a texture that fits, the
   // colour statistics of thin parts and of backgrounds with the object's colours mislead

@@ -382,6 +382,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"min_contrast", YamlField(&rg.min_contrast)},
         {"skip_occluded_lines", YamlField(&rg.skip_occluded_lines)},
         {"occluded_probe_px", YamlField(&rg.occluded_probe_px)},
+        {"edge_contradiction_px", YamlField(&rg.edge_contradiction_px)},
         {"kernel", YamlEnumField(&rg.residual.kernel, &ParseRobustKernel)},
         {"kernel_width", YamlField(&rg.residual.kernel_width)},
         {"min_scale", YamlField(&rg.residual.min_scale)},
