@@ -676,22 +676,49 @@ TEST(RegionModality, HistogramsLearnAndJudgeColours) {
   EXPECT_FALSE(h.learnt());
 }
 
+// A 48x48 square of `object` colour on `background` in a 96x96 image, its mask and depth,
+// and the region modality's input over them.
+struct SquareScene {
+  SquareScene(const cv::Vec3f& background, const cv::Vec3f& object)
+      : image(kSize, kSize, CV_32FC3, background),
+        mask(cv::Mat::zeros(kSize, kSize, CV_8UC1)),
+        depth(kSize, kSize, CV_32FC1, cv::Scalar(0.0f)) {
+    image(square).setTo(object);
+    mask(square).setTo(255);
+    depth.setTo(1.0f, mask);
+  }
+  RegionModalityInput Input() const {
+    RegionModalityInput in;
+    in.image = &image;
+    in.mask = &mask;
+    in.rendered_depth = &depth;
+    in.roi = PixelRect{0, 0, kSize, kSize};
+    in.camera = PinholeCamera::Centered(kSize, kSize, 100.0);
+    in.origin_in_cam = Eigen::Vector3d(0.0, 0.0, 1.0);
+    return in;
+  }
+  // `histograms` learnt from the image as it is now.
+  void Learn(const RegionModalityOptions& options, ColorHistograms* histograms) const {
+    FlowEquations ignored;
+    RegionCounts learnt;
+    AddRegionEquations(Input(), options, /*learn=*/true, histograms, &ignored, &learnt);
+    histograms->Commit(1.0);
+  }
+  static constexpr int kSize = 96;
+  const cv::Rect square{24, 24, 48, 48};
+  cv::Mat image, mask, depth;
+};
+
 // A square red object on grey; an occluder coloured like the background covers the square's
 // right edge. Its lines see background where the object should be and pull the contour in by
 // several standard deviations; with the occluder's blocks marked (as the photometric
 // selection marks them) they are left out and the rest sit on the contour.
 TEST(RegionModality, LinesAcrossAnOccluderAreLeftOut) {
-  const int size = 96, block = 8;
-  const cv::Vec3f grey(0.6f, 0.6f, 0.6f), red(0.1f, 0.1f, 0.9f);
-  cv::Mat image(size, size, CV_32FC3, grey);
-  cv::Mat mask = cv::Mat::zeros(size, size, CV_8UC1);
-  const cv::Rect square(24, 24, 48, 48);
-  image(square).setTo(red);
-  mask(square).setTo(255);
+  const int block = 8;
+  SquareScene scene(cv::Vec3f(0.6f, 0.6f, 0.6f), cv::Vec3f(0.1f, 0.1f, 0.9f));
+  const int size = SquareScene::kSize;
   const cv::Rect occluder(56, 16, 32, 64);  // over the square's right edge (x = 71)
-  image(occluder).setTo(cv::Vec3f(0.62f, 0.58f, 0.6f));
-  cv::Mat depth(size, size, CV_32FC1, cv::Scalar(0.0f));
-  depth.setTo(1.0f, mask);
+  scene.image(occluder).setTo(cv::Vec3f(0.62f, 0.58f, 0.6f));
   cv::Mat occluded = cv::Mat::zeros(size / block, size / block, CV_8UC1);
   occluded(cv::Rect(occluder.x / block, occluder.y / block, occluder.width / block,
                     occluder.height / block))
@@ -699,18 +726,9 @@ TEST(RegionModality, LinesAcrossAnOccluderAreLeftOut) {
 
   RegionModalityOptions options;
   ColorHistograms histograms(options.bins_per_channel);
-  RegionModalityInput in;
-  in.image = &image;
-  in.mask = &mask;
-  in.rendered_depth = &depth;
-  in.roi = PixelRect{0, 0, size, size};
-  in.camera = PinholeCamera::Centered(size, size, 100.0);
-  in.origin_in_cam = Eigen::Vector3d(0.0, 0.0, 1.0);
-  FlowEquations ignored;
-  RegionCounts learnt;
-  AddRegionEquations(in, options, /*learn=*/true, &histograms, &ignored, &learnt);
-  histograms.Commit(1.0);
+  scene.Learn(options, &histograms);
   ASSERT_TRUE(histograms.learnt());
+  RegionModalityInput in = scene.Input();
 
   auto largest_offset = [&](bool mark, RegionCounts* counts) {
     in.occluded_blocks = mark ? &occluded : nullptr;
@@ -741,32 +759,16 @@ TEST(RegionModality, LinesAcrossAnOccluderAreLeftOut) {
 // step stays on the rendered contour: with RegionModalityOptions::edge_contradiction_px
 // they give no row, and the rest sit on the contour.
 TEST(RegionModality, LinesWhoseColoursLeaveTheImagesEdgeGiveNoRow) {
-  const int size = 96;
   const cv::Vec3f object(0.56f, 0.56f, 0.56f), look_alike(0.505f, 0.505f, 0.505f),
       background(0.49f, 0.49f, 0.49f);
-  cv::Mat image(size, size, CV_32FC3, background);
-  cv::Mat mask = cv::Mat::zeros(size, size, CV_8UC1);
-  const cv::Rect square(24, 24, 48, 48);
-  image(square).setTo(object);
-  mask(square).setTo(255);
-  cv::Mat depth(size, size, CV_32FC1, cv::Scalar(0.0f));
-  depth.setTo(1.0f, mask);
+  SquareScene scene(background, object);
   RegionModalityOptions options;
   ColorHistograms histograms(options.bins_per_channel);
-  RegionModalityInput in;
-  in.image = &image;
-  in.mask = &mask;
-  in.rendered_depth = &depth;
-  in.roi = PixelRect{0, 0, size, size};
-  in.camera = PinholeCamera::Centered(size, size, 100.0);
-  in.origin_in_cam = Eigen::Vector3d(0.0, 0.0, 1.0);
-  FlowEquations ignored;
-  RegionCounts learnt;
-  AddRegionEquations(in, options, /*learn=*/true, &histograms, &ignored, &learnt);
-  histograms.Commit(1.0);
+  scene.Learn(options, &histograms);
   ASSERT_TRUE(histograms.learnt());
   ASSERT_GT(histograms.Posterior(histograms.Bin(&look_alike[0])), 0.5f);
-  image(cv::Rect(square.x + square.width, 16, 9, 64)).setTo(look_alike);
+  scene.image(cv::Rect(scene.square.x + scene.square.width, 16, 9, 64)).setTo(look_alike);
+  const RegionModalityInput in = scene.Input();
 
   auto largest_offset = [&](double contradiction_px, RegionCounts* counts) {
     options.edge_contradiction_px = contradiction_px;

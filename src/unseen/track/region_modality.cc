@@ -273,7 +273,8 @@ void AddRegionEquations(const RegionModalityInput& in, const RegionModalityOptio
         if (s > options.learn_margin_px) histograms->Count(bgr, false);
       }
     }
-    if (largest_step > 0.0f && std::abs(step_at - half) <= 1) ++c.edge_lines;
+    const bool edge_on_contour = largest_step > 0.0f && std::abs(step_at - half) <= 1;
+    if (edge_on_contour) ++c.edge_lines;
     if (!solve) continue;
     // Agreement of the pixels away from the contour with the side they are on.
     double contrast = 0.0;
@@ -312,8 +313,8 @@ void AddRegionEquations(const RegionModalityInput& in, const RegionModalityOptio
     variance /= sum;
     const double sigma = std::max(std::sqrt(variance), options.min_sigma_px);
     if (sigma > options.max_sigma_px || contrast < options.min_contrast) continue;
-    if (options.edge_contradiction_px > 0.0 && largest_step > 0.0 &&
-        std::abs(step_at - half) <= 1 && std::abs(mean) > options.edge_contradiction_px) {
+    if (options.edge_contradiction_px > 0.0 && edge_on_contour &&
+        std::abs(mean) > options.edge_contradiction_px) {
       continue;
     }
     const float z = depth.ptr<float>(cs.y)[cs.x];
