@@ -53,20 +53,6 @@ Mesh WithBlock(const Mesh& base, const Eigen::Vector3f& scale, const Eigen::Vect
   return out;
 }
 
-// Metric depth of `mesh` at `world_from_obj` in front of a wall at `wall_m`, as an RGB-D
-// camera registered to the colour camera measures it.
-cv::Mat DepthImage(const Mesh& mesh, const RigCamera& camera, const Rigid3d& world_from_obj,
-                   float wall_m) {
-  RenderBuffers buffers;
-  RenderOptions options;
-  options.write_color = false;
-  Render(mesh, camera.intrinsics, camera.cam_from_world() * world_from_obj,
-         camera.intrinsics.ImageRect(), options, &buffers);
-  cv::Mat depth(buffers.depth.size(), CV_32FC1, cv::Scalar(wall_m));
-  buffers.depth.copyTo(depth, buffers.mask);
-  return depth;
-}
-
 class ModalityScene : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -77,7 +63,7 @@ class ModalityScene : public ::testing::Test {
     background_ = cv::Mat(rig_.cameras[0].intrinsics.height, rig_.cameras[0].intrinsics.width,
                           CV_32FC3, cv::Scalar(0.8, 0.85, 0.9));
     frame_.images = {testing::RenderOverBackground(flat_, rig_.cameras[0], truth_, background_)};
-    frame_.depths = {DepthImage(flat_, rig_.cameras[0], truth_, 1.6f)};
+    frame_.depths = {testing::DepthImage(flat_, rig_.cameras[0], truth_, 1.6f)};
   }
   Rig rig_;
   Rigid3d truth_;
@@ -300,7 +286,7 @@ TEST_F(ModalityScene, AllModalitiesTogether) {
   Frame frame;
   frame.images = {testing::RenderOverBackground(textured, rig_.cameras[0], truth_,
                                                 testing::Background(rig_.cameras[0].intrinsics, 3))};
-  frame.depths = {DepthImage(textured, rig_.cameras[0], truth_, 1.6f)};
+  frame.depths = {testing::DepthImage(textured, rig_.cameras[0], truth_, 1.6f)};
   Tracker tracker(rig_, textured);
   tracker.Initialize(truth_);
   tracker.Track(frame);
@@ -330,7 +316,7 @@ TEST_F(ModalityScene, AFastMotionsCoarseLevelsFollowTheTextureNotTheDepthOffIt) 
     Frame frame;
     frame.images = {testing::RenderOverBackground(textured, rig_.cameras[0], world_from_obj,
                                                   background)};
-    frame.depths = {DepthImage(textured, rig_.cameras[0], depth_from_colour * world_from_obj,
+    frame.depths = {testing::DepthImage(textured, rig_.cameras[0], depth_from_colour * world_from_obj,
                                1.6f)};
     return frame;
   };
@@ -365,7 +351,7 @@ TEST_F(ModalityScene, ADoubtfulFrameIsAlignedAgainWithDepthAtEveryLevel) {
       cv::filter2D(image, image, -1, kernel, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
     }
     frame.images = {image};
-    frame.depths = {DepthImage(textured, rig_.cameras[0], world_from_obj, 1.6f)};
+    frame.depths = {testing::DepthImage(textured, rig_.cameras[0], world_from_obj, 1.6f)};
     return frame;
   };
   const Frame first = frame_at(truth_, 0), second = frame_at(moved, 31);
@@ -509,281 +495,6 @@ TEST_F(ModalityScene, AFewSilhouetteLinesFarOffTheirContourAreNotOutvotedByTheSi
   EXPECT_NEAR(tracker.Confidence(few_speak), 0.7, 0.01) << r.BriefReport();
   EXPECT_LT(tracker.Confidence(few_far_off), TrackerOptions().failure.lost_confidence)
       << r.BriefReport();
-}
-
-// The flat cube rendered at CubePose() in one camera, and the depth modality's input for a
-// measured depth image of it.
-struct DepthScene {
-  explicit DepthScene(const Rigid3d& pose = CubePose()) : cam_from_obj(pose) {
-    RenderOptions options;
-    options.write_color = false;
-    Render(cube, rig.cameras[0].intrinsics, cam_from_obj, roi, options, &rendered);
-  }
-  cv::Mat TrueDepth() const { return DepthImage(cube, rig.cameras[0], cam_from_obj, 1.6f); }
-  DepthModalityInput Input(const cv::Mat* measured) const {
-    DepthModalityInput in;
-    in.rendered_depth = &rendered.depth;
-    in.roi = roi;
-    in.level_camera = rig.cameras[0].intrinsics;
-    in.measured_depth = measured;
-    in.camera = rig.cameras[0].intrinsics;
-    in.origin_in_cam = cam_from_obj.translation();
-    return in;
-  }
-  Rig rig = testing::OneCameraRig();
-  Mesh cube = testing::FlatCube();
-  Rigid3d cam_from_obj;
-  PixelRect roi{150, 50, 370, 210};
-  RenderBuffers rendered;
-};
-
-TEST(DepthModality, RowsVanishAtTheTruePose) {
-  const DepthScene scene;
-  const cv::Mat measured = scene.TrueDepth();
-  FlowEquations eq;
-  DepthCounts counts;
-  AddDepthEquations(scene.Input(&measured), DepthModalityOptions(), &eq, &counts);
-  ASSERT_GT(eq.size(), 200);
-  for (int i = 0; i < eq.size(); ++i) EXPECT_LT(std::abs(eq.rhs[i]), 1e-4) << i;
-  EXPECT_EQ(counts.agreeing, counts.measured);
-  EXPECT_EQ(counts.hidden, 0);
-  EXPECT_NEAR(counts.Agreement(DepthModalityOptions()), 1.0, 1e-12);
-}
-
-TEST(DepthModality, ASurfaceInFrontGivesNoRowsUnlessMostOfTheObjectIsBehindOne) {
-  // The measured depth of the cube at its true pose, with a band of the image 19 mm nearer
-  // (a finger across it). Within the gate, those pairs would give rows that pull the face
-  // towards the finger; nearer by more than occluder_margin_m, they are an occluder and give
-  // none. When most of the object is behind the measured surface, the pose is behind it:
-  // then every pair gives its row.
-  const DepthScene scene;
-  const cv::Mat truth = scene.TrueDepth();
-  const PixelRect& roi = scene.roi;
-  auto rows = [&](int band_rows, double margin_m, DepthCounts* counts) {
-    cv::Mat measured = truth.clone();
-    cv::Mat band = measured(cv::Rect(0, roi.y0, measured.cols, band_rows));
-    band -= 0.019f;
-    DepthModalityOptions options;
-    options.occluder_margin_m = margin_m;
-    FlowEquations eq;
-    AddDepthEquations(scene.Input(&measured), options, &eq, counts);
-    int in_front = 0;
-    for (int i = 0; i < eq.size(); ++i) in_front += eq.rhs[i] > 0.005f;  // towards the camera
-    return std::make_pair(eq.size(), in_front);
-  };
-  const double margin = DepthModalityOptions().occluder_margin_m;
-  DepthCounts partly, kept_counts, mostly;
-  const auto [rows_partly, front_partly] = rows(60, margin, &partly);
-  const auto [rows_kept, front_kept] = rows(60, 0.0, &kept_counts);
-  EXPECT_GT(partly.hidden, 30);
-  EXPECT_LT(2 * partly.hidden, partly.measured);
-  EXPECT_EQ(front_partly, 0) << "no row from the surface in front";
-  EXPECT_GT(rows_partly, 100);
-  EXPECT_GT(front_kept, 30) << "without the margin, the surface in front gives rows";
-  EXPECT_GT(rows_kept, rows_partly);
-  const auto [rows_mostly, front_mostly] = rows(roi.height(), margin, &mostly);
-  EXPECT_GT(2 * mostly.hidden, mostly.measured);
-  EXPECT_GT(front_mostly, 100) << "the pose is behind the measured surface: every row";
-  EXPECT_THROW(ParseTrackerOptions("depth: {occluder_margin_m: -0.01}\n"), Error);
-  EXPECT_THROW(ParseTrackerOptions("depth: {occluder_margin_sigmas: -1}\n"), Error);
-  EXPECT_THROW(ParseTrackerOptions("depth: {occluder_margin_sigmas: .nan}\n"), Error);
-}
-
-TEST(DepthModality, AHandOverNearlyHalfTheObjectIsStillAnOccluder) {
-  // A hand over 48 % of the object, 11 mm in front of it (fingers lying across its faces),
-  // and the sensor's noise (1 mm, independent from pixel to pixel). The hand spreads the
-  // pairs' depth differences far beyond the noise; taken for noise, that spread raises the
-  // occluder margin past the hand and keeps its rows, which pull the object towards it.
-  // The measured surface's roughness between neighbouring pixels sees the noise alone.
-  const DepthScene scene;
-  cv::Mat measured = scene.TrueDepth();
-  cv::Mat noise(measured.size(), CV_32F);
-  cv::RNG rng(7);
-  rng.fill(noise, cv::RNG::NORMAL, 0.0, 0.001);
-  cv::add(measured, noise, measured, measured > 0.0f);
-  const cv::Mat on_object = scene.rendered.depth > 0.0f;
-  const int object_px = cv::countNonZero(on_object);
-  int hand_rows = 0;
-  for (int covered = 0; covered < 0.48 * object_px; ++hand_rows) {
-    covered += cv::countNonZero(on_object.row(hand_rows));
-  }
-  measured(cv::Rect(0, scene.roi.y0, measured.cols, hand_rows)) -= 0.011f;
-  auto rows = [&](const DepthModalityOptions& options, DepthCounts* counts) {
-    FlowEquations eq;
-    AddDepthEquations(scene.Input(&measured), options, &eq, counts);
-    double pull = 0.0;  // mean right-hand side: > 0 pulls the object towards the camera
-    for (int i = 0; i < eq.size(); ++i) pull += eq.rhs[i];
-    return std::make_pair(eq.size(), pull / std::max(1, eq.size()));
-  };
-  DepthCounts counts, spread_counts;
-  const auto [kept, pull] = rows(DepthModalityOptions(), &counts);
-  EXPECT_GT(counts.hidden, 0.35 * counts.measured);
-  EXPECT_LT(2 * counts.hidden, counts.measured);
-  DepthModalityOptions spread_only;
-  spread_only.roughness_noise_factor = 1e6;
-  const auto [spread_kept, spread_pull] = rows(spread_only, &spread_counts);
-  EXPECT_GT(spread_kept, kept + 150) << "the spread alone keeps the hand's rows";
-  EXPECT_GT(spread_pull, 0.002);
-  EXPECT_LT(pull, 0.001) << "without them, little pull towards the hand";
-  EXPECT_GT(kept, 300);
-  EXPECT_THROW(ParseTrackerOptions("depth: {roughness_noise_factor: 0}\n"), Error);
-}
-
-TEST(DepthModality, ASteepSurfaceMeasuredPixelsOffKeepsItsRows) {
-  // The cube turned so that one face is seen at 69 deg, its depth image registered 3 px off
-  // the colour camera, nothing in front: on the steep face the measured surface lies more
-  // than the occluder margin nearer than the rendered one at the same pixel. Those pairs
-  // are no occluder: the margin grows with the rendered slope.
-  const DepthScene scene(Rigid3d(ExpSO3(Eigen::Vector3d(0.2, 1.2, 0.0)), CubePose().translation()));
-  const cv::Mat truth = scene.TrueDepth();
-  cv::Mat measured(truth.size(), CV_32F, cv::Scalar(0.0f));
-  const int shift = 3;
-  truth(cv::Rect(shift, 0, truth.cols - shift, truth.rows))
-      .copyTo(measured(cv::Rect(0, 0, truth.cols - shift, truth.rows)));
-  auto rows = [&](double slope_px, DepthCounts* counts) {
-    DepthModalityOptions options;
-    options.occluder_slope_px = slope_px;
-    FlowEquations eq;
-    AddDepthEquations(scene.Input(&measured), options, &eq, counts);
-    return eq.size();
-  };
-  DepthCounts counts, flat_counts;
-  const int kept = rows(DepthModalityOptions().occluder_slope_px, &counts);
-  const int kept_flat = rows(0.0, &flat_counts);
-  EXPECT_GT(counts.hidden, 30);
-  EXPECT_GT(kept, kept_flat + 50) << "the steep face's rows are kept";
-  EXPECT_GT(kept, 0.85 * counts.measured);
-  EXPECT_THROW(ParseTrackerOptions("depth: {occluder_slope_px: -1}\n"), Error);
-}
-
-TEST(RegionModality, HistogramsLearnAndJudgeColours) {
-  ColorHistograms h(16);
-  EXPECT_FALSE(h.learnt());
-  const float red[3] = {0.1f, 0.1f, 0.9f}, grey[3] = {0.6f, 0.6f, 0.6f};
-  for (int i = 0; i < 100; ++i) {
-    h.Count(red, true);
-    h.Count(grey, false);
-  }
-  h.Commit(0.2);
-  ASSERT_TRUE(h.learnt());
-  EXPECT_GT(h.Foreground(red), 0.99f);
-  EXPECT_LT(h.Foreground(grey), 0.01f);
-  // Too few samples leave the histograms as they are.
-  h.Count(grey, true);
-  h.Commit(1.0);
-  EXPECT_LT(h.Foreground(grey), 0.01f);
-  h.Reset();
-  EXPECT_FALSE(h.learnt());
-}
-
-// A 48x48 square of `object` colour on `background` in a 96x96 image, its mask and depth,
-// and the region modality's input over them.
-struct SquareScene {
-  SquareScene(const cv::Vec3f& background, const cv::Vec3f& object)
-      : image(kSize, kSize, CV_32FC3, background),
-        mask(cv::Mat::zeros(kSize, kSize, CV_8UC1)),
-        depth(kSize, kSize, CV_32FC1, cv::Scalar(0.0f)) {
-    image(square).setTo(object);
-    mask(square).setTo(255);
-    depth.setTo(1.0f, mask);
-  }
-  RegionModalityInput Input() const {
-    RegionModalityInput in;
-    in.image = &image;
-    in.mask = &mask;
-    in.rendered_depth = &depth;
-    in.roi = PixelRect{0, 0, kSize, kSize};
-    in.camera = PinholeCamera::Centered(kSize, kSize, 100.0);
-    in.origin_in_cam = Eigen::Vector3d(0.0, 0.0, 1.0);
-    return in;
-  }
-  // `histograms` learnt from the image as it is now.
-  void Learn(const RegionModalityOptions& options, ColorHistograms* histograms) const {
-    FlowEquations ignored;
-    RegionCounts learnt;
-    AddRegionEquations(Input(), options, /*learn=*/true, histograms, &ignored, &learnt);
-    histograms->Commit(1.0);
-  }
-  static constexpr int kSize = 96;
-  const cv::Rect square{24, 24, 48, 48};
-  cv::Mat image, mask, depth;
-};
-
-// A square red object on grey; an occluder coloured like the background covers the square's
-// right edge. Its lines see background where the object should be and pull the contour in by
-// several standard deviations; with the occluder's blocks marked (as the photometric
-// selection marks them) they are left out and the rest sit on the contour.
-TEST(RegionModality, LinesAcrossAnOccluderAreLeftOut) {
-  const int block = 8;
-  SquareScene scene(cv::Vec3f(0.6f, 0.6f, 0.6f), cv::Vec3f(0.1f, 0.1f, 0.9f));
-  const int size = SquareScene::kSize;
-  const cv::Rect occluder(56, 16, 32, 64);  // over the square's right edge (x = 71)
-  scene.image(occluder).setTo(cv::Vec3f(0.62f, 0.58f, 0.6f));
-  cv::Mat occluded = cv::Mat::zeros(size / block, size / block, CV_8UC1);
-  occluded(cv::Rect(occluder.x / block, occluder.y / block, occluder.width / block,
-                    occluder.height / block))
-      .setTo(255);
-
-  RegionModalityOptions options;
-  ColorHistograms histograms(options.bins_per_channel);
-  scene.Learn(options, &histograms);
-  ASSERT_TRUE(histograms.learnt());
-  RegionModalityInput in = scene.Input();
-
-  auto largest_offset = [&](bool mark, RegionCounts* counts) {
-    in.occluded_blocks = mark ? &occluded : nullptr;
-    in.occluded_block_px = mark ? block : 0;
-    FlowEquations rows;
-    AddRegionEquations(in, options, /*learn=*/false, &histograms, &rows, counts);
-    float largest = 0.0f;
-    for (float b : rows.rhs) largest = std::max(largest, std::abs(b));
-    return largest;
-  };
-  RegionCounts unmarked, marked;
-  EXPECT_GT(largest_offset(false, &unmarked), 3.0f);
-  EXPECT_EQ(unmarked.occluded, 0);
-  EXPECT_LT(largest_offset(true, &marked), 1.5f);
-  EXPECT_GT(marked.occluded, 0);
-  EXPECT_EQ(marked.lines + marked.occluded, unmarked.lines);
-  EXPECT_GT(marked.Agreement(), unmarked.Agreement());
-  // Switched off, the marks are ignored.
-  options.skip_occluded_lines = false;
-  RegionCounts off;
-  EXPECT_GT(largest_offset(true, &off), 3.0f);
-  EXPECT_EQ(off.occluded, 0);
-}
-
-// A square object before a background of nearly its colour, its histograms learnt; then a
-// look-alike band (a shade darker, in the object's colour bins) right behind its right
-// edge. Those lines' colours run the contour out onto the band, while the image's largest
-// step stays on the rendered contour: with RegionModalityOptions::edge_contradiction_px
-// they give no row, and the rest sit on the contour.
-TEST(RegionModality, LinesWhoseColoursLeaveTheImagesEdgeGiveNoRow) {
-  const cv::Vec3f object(0.56f, 0.56f, 0.56f), look_alike(0.505f, 0.505f, 0.505f),
-      background(0.49f, 0.49f, 0.49f);
-  SquareScene scene(background, object);
-  RegionModalityOptions options;
-  ColorHistograms histograms(options.bins_per_channel);
-  scene.Learn(options, &histograms);
-  ASSERT_TRUE(histograms.learnt());
-  ASSERT_GT(histograms.Posterior(histograms.Bin(&look_alike[0])), 0.5f);
-  scene.image(cv::Rect(scene.square.x + scene.square.width, 16, 9, 64)).setTo(look_alike);
-  const RegionModalityInput in = scene.Input();
-
-  auto largest_offset = [&](double contradiction_px, RegionCounts* counts) {
-    options.edge_contradiction_px = contradiction_px;
-    FlowEquations rows;
-    AddRegionEquations(in, options, /*learn=*/false, &histograms, &rows, counts);
-    float largest = 0.0f;
-    for (float b : rows.rhs) largest = std::max(largest, std::abs(b));
-    return largest;
-  };
-  RegionCounts off, on;
-  EXPECT_GT(largest_offset(0.0, &off), 6.0f);
-  EXPECT_LT(largest_offset(6.0, &on), 1.5f);
-  EXPECT_LT(on.used, off.used);
-  EXPECT_GT(on.used, off.used / 2);
-  EXPECT_THROW(ParseTrackerOptions("region: {edge_contradiction_px: -1}\n"), Error);
 }
 
 // The textured cube at rest, half hidden by a plate that covers its right part and contour

@@ -66,4 +66,18 @@ inline cv::Mat RenderOverBackground(const Mesh& mesh, const RigCamera& camera,
   return out;
 }
 
+// Metric depth of `mesh` at `world_from_obj` in front of a wall at `wall_m`, as an RGB-D
+// camera registered to the colour camera measures it.
+inline cv::Mat DepthImage(const Mesh& mesh, const RigCamera& camera, const Rigid3d& world_from_obj,
+                          float wall_m) {
+  RenderBuffers buffers;
+  RenderOptions options;
+  options.write_color = false;
+  Render(mesh, camera.intrinsics, camera.cam_from_world() * world_from_obj,
+         camera.intrinsics.ImageRect(), options, &buffers);
+  cv::Mat depth(buffers.depth.size(), CV_32FC1, cv::Scalar(wall_m));
+  buffers.depth.copyTo(depth, buffers.mask);
+  return depth;
+}
+
 }  // namespace unseen::testing

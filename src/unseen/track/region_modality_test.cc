@@ -1,0 +1,148 @@
+// unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
+//
+// The region (silhouette) modality's parts on their own: the colour histograms, and which
+// lines across the contour give rows (none across an occluder, none whose colours leave the
+// image's edge).
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "unseen/track/region_modality.h"
+#include "unseen/track/tracker_options.h"
+#include "unseen/util/error.h"
+
+namespace unseen {
+namespace {
+
+TEST(RegionModality, HistogramsLearnAndJudgeColours) {
+  ColorHistograms h(16);
+  EXPECT_FALSE(h.learnt());
+  const float red[3] = {0.1f, 0.1f, 0.9f}, grey[3] = {0.6f, 0.6f, 0.6f};
+  for (int i = 0; i < 100; ++i) {
+    h.Count(red, true);
+    h.Count(grey, false);
+  }
+  h.Commit(0.2);
+  ASSERT_TRUE(h.learnt());
+  EXPECT_GT(h.Foreground(red), 0.99f);
+  EXPECT_LT(h.Foreground(grey), 0.01f);
+  // Too few samples leave the histograms as they are.
+  h.Count(grey, true);
+  h.Commit(1.0);
+  EXPECT_LT(h.Foreground(grey), 0.01f);
+  h.Reset();
+  EXPECT_FALSE(h.learnt());
+}
+
+// A 48x48 square of `object` colour on `background` in a 96x96 image, its mask and depth,
+// and the region modality's input over them.
+struct SquareScene {
+  SquareScene(const cv::Vec3f& background, const cv::Vec3f& object)
+      : image(kSize, kSize, CV_32FC3, background),
+        mask(cv::Mat::zeros(kSize, kSize, CV_8UC1)),
+        depth(kSize, kSize, CV_32FC1, cv::Scalar(0.0f)) {
+    image(square).setTo(object);
+    mask(square).setTo(255);
+    depth.setTo(1.0f, mask);
+  }
+  RegionModalityInput Input() const {
+    RegionModalityInput in;
+    in.image = &image;
+    in.mask = &mask;
+    in.rendered_depth = &depth;
+    in.roi = PixelRect{0, 0, kSize, kSize};
+    in.camera = PinholeCamera::Centered(kSize, kSize, 100.0);
+    in.origin_in_cam = Eigen::Vector3d(0.0, 0.0, 1.0);
+    return in;
+  }
+  // `histograms` learnt from the image as it is now.
+  void Learn(const RegionModalityOptions& options, ColorHistograms* histograms) const {
+    FlowEquations ignored;
+    RegionCounts learnt;
+    AddRegionEquations(Input(), options, /*learn=*/true, histograms, &ignored, &learnt);
+    histograms->Commit(1.0);
+  }
+  static constexpr int kSize = 96;
+  const cv::Rect square{24, 24, 48, 48};
+  cv::Mat image, mask, depth;
+};
+
+// A square red object on grey; an occluder coloured like the background covers the square's
+// right edge. Its lines see background where the object should be and pull the contour in by
+// several standard deviations; with the occluder's blocks marked (as the photometric
+// selection marks them) they are left out and the rest sit on the contour.
+TEST(RegionModality, LinesAcrossAnOccluderAreLeftOut) {
+  const int block = 8;
+  SquareScene scene(cv::Vec3f(0.6f, 0.6f, 0.6f), cv::Vec3f(0.1f, 0.1f, 0.9f));
+  const int size = SquareScene::kSize;
+  const cv::Rect occluder(56, 16, 32, 64);  // over the square's right edge (x = 71)
+  scene.image(occluder).setTo(cv::Vec3f(0.62f, 0.58f, 0.6f));
+  cv::Mat occluded = cv::Mat::zeros(size / block, size / block, CV_8UC1);
+  occluded(cv::Rect(occluder.x / block, occluder.y / block, occluder.width / block,
+                    occluder.height / block))
+      .setTo(255);
+
+  RegionModalityOptions options;
+  ColorHistograms histograms(options.bins_per_channel);
+  scene.Learn(options, &histograms);
+  ASSERT_TRUE(histograms.learnt());
+  RegionModalityInput in = scene.Input();
+
+  auto largest_offset = [&](bool mark, RegionCounts* counts) {
+    in.occluded_blocks = mark ? &occluded : nullptr;
+    in.occluded_block_px = mark ? block : 0;
+    FlowEquations rows;
+    AddRegionEquations(in, options, /*learn=*/false, &histograms, &rows, counts);
+    float largest = 0.0f;
+    for (float b : rows.rhs) largest = std::max(largest, std::abs(b));
+    return largest;
+  };
+  RegionCounts unmarked, marked;
+  EXPECT_GT(largest_offset(false, &unmarked), 3.0f);
+  EXPECT_EQ(unmarked.occluded, 0);
+  EXPECT_LT(largest_offset(true, &marked), 1.5f);
+  EXPECT_GT(marked.occluded, 0);
+  EXPECT_EQ(marked.lines + marked.occluded, unmarked.lines);
+  EXPECT_GT(marked.Agreement(), unmarked.Agreement());
+  // Switched off, the marks are ignored.
+  options.skip_occluded_lines = false;
+  RegionCounts off;
+  EXPECT_GT(largest_offset(true, &off), 3.0f);
+  EXPECT_EQ(off.occluded, 0);
+}
+
+// A square object before a background of nearly its colour, its histograms learnt; then a
+// look-alike band (a shade darker, in the object's colour bins) right behind its right
+// edge. Those lines' colours run the contour out onto the band, while the image's largest
+// step stays on the rendered contour: with RegionModalityOptions::edge_contradiction_px
+// they give no row, and the rest sit on the contour.
+TEST(RegionModality, LinesWhoseColoursLeaveTheImagesEdgeGiveNoRow) {
+  const cv::Vec3f object(0.56f, 0.56f, 0.56f), look_alike(0.505f, 0.505f, 0.505f),
+      background(0.49f, 0.49f, 0.49f);
+  SquareScene scene(background, object);
+  RegionModalityOptions options;
+  ColorHistograms histograms(options.bins_per_channel);
+  scene.Learn(options, &histograms);
+  ASSERT_TRUE(histograms.learnt());
+  ASSERT_GT(histograms.Posterior(histograms.Bin(&look_alike[0])), 0.5f);
+  scene.image(cv::Rect(scene.square.x + scene.square.width, 16, 9, 64)).setTo(look_alike);
+  const RegionModalityInput in = scene.Input();
+
+  auto largest_offset = [&](double contradiction_px, RegionCounts* counts) {
+    options.edge_contradiction_px = contradiction_px;
+    FlowEquations rows;
+    AddRegionEquations(in, options, /*learn=*/false, &histograms, &rows, counts);
+    float largest = 0.0f;
+    for (float b : rows.rhs) largest = std::max(largest, std::abs(b));
+    return largest;
+  };
+  RegionCounts off, on;
+  EXPECT_GT(largest_offset(0.0, &off), 6.0f);
+  EXPECT_LT(largest_offset(6.0, &on), 1.5f);
+  EXPECT_LT(on.used, off.used);
+  EXPECT_GT(on.used, off.used / 2);
+  EXPECT_THROW(ParseTrackerOptions("region: {edge_contradiction_px: -1}\n"), Error);
+}
+
+}  // namespace
+}  // namespace unseen
