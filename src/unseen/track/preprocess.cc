@@ -22,6 +22,10 @@ void PreprocessOptions::Check() const {
                "preprocess.silhouette_gamma {} must be in [1, 3]", silhouette_gamma);
   UNSEEN_CHECK(shading_sigma_px > 0.0 && std::isfinite(shading_sigma_px),
                "preprocess.shading_sigma_px {} must be > 0", shading_sigma_px);
+  UNSEEN_CHECK(background_band_px >= 0 && background_band_px <= 16,
+               "preprocess.background_band_px {} must be in [0, 16]", background_band_px);
+  UNSEEN_CHECK(background_sigma_px > 0.0 && background_sigma_px <= 20.0,
+               "preprocess.background_sigma_px {} must be in (0, 20]", background_sigma_px);
 }
 
 double PreprocessOptions::ShadingSigmaAtLevel(int level) const {

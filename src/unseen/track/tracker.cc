@@ -105,6 +105,7 @@ struct Tracker::CameraWork {
   PreprocessedImage input_pre, virtual_pre;
   bool virtual_ok = false;  // the last PrepareVirtual rendered something
   bool input_stale = false; // input_roi changed since input_pre was computed
+  int rim_px = 0;            // the current alignment's rim (PyramidOptions::rim_px)
   // This camera's share of the current alignment; the input's pre-processing apart, as it
   // may run beside the virtual image's.
   StageTimes times;
@@ -357,8 +358,10 @@ bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int l
     const PixelRect tight = rect->Grow(1).Intersect(w.roi);
     if (!tight.empty()) render_rect = tight;
   }
+  PreprocessOptions compose = options_.preprocess;
+  if (!OutlineIsTheObjects()) compose.background_band_px = 0;
   return ComposeVirtualImage(*model_, w.camera, cam_from_obj, w.roi, render_rect, w.input_roi,
-                             supersample, options_.preprocess, level, render_pool, &w.virtual_image,
+                             supersample, compose, level, render_pool, &w.virtual_image,
                              &w.times.render_ms, &w.times.preprocess_ms);
 }
 
@@ -373,10 +376,11 @@ bool Tracker::PrepareVirtual(const Rigid3d& cam_from_obj, int level, ThreadPool*
   if (use_photometric_) {
     Preprocess(w.virtual_image.composite, options_.preprocess, level, true, &w.virtual_pre);
   }
-  // Mask and its blurred rim; depth of the rim from the nearest surface.
-  if (po.rim_px > 0) {
+  // Mask and its rim; depth of the rim from the nearest surface.
+  const int rim_px = w.rim_px;
+  if (rim_px > 0) {
     const cv::Mat rim_kernel =
-        cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * po.rim_px + 1, 2 * po.rim_px + 1));
+        cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * rim_px + 1, 2 * rim_px + 1));
     cv::dilate(w.virtual_image.mask, w.region, rim_kernel);
     cv::dilate(w.virtual_image.depth, w.depth_used, rim_kernel);
     w.virtual_image.depth.copyTo(w.depth_used, w.virtual_image.mask);
@@ -431,7 +435,13 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
   // Input around the object: what the filters need beyond the rim and, with the region
   // modality, a whole correspondence line outside the contour (a line that leaves the
   // region gives no row, and the contour's extremes are the lines that place the object).
-  int margin = static_cast<int>(std::ceil(3.0 * options_.preprocess.blur_sigma_px)) + po.rim_px + 2;
+  // The rim's photometric rows, for a frame's alignment from the predicted pose only: a
+  // search's alignments start far off, where the rim compares the background estimated
+  // beside a wrong outline with whatever texture lies there and swamps the texture's rows
+  // (a cube found again at a proposed orientation: never, with a rim of 2 px).
+  const int rim_px = OutlineIsTheObjects() && span.tracking ? po.rim_px : 0;
+  for (auto& w : work_) w->rim_px = rim_px;
+  int margin = static_cast<int>(std::ceil(3.0 * options_.preprocess.blur_sigma_px)) + rim_px + 2;
   if (options_.region.enabled) margin = std::max(margin, options_.region.line_px + 2);
   const bool input_gradients = options_.selection.use_occlusion_rejection;
   ResidualModel& photometric_model = photometric_.residual_model();

@@ -270,6 +270,12 @@ class Tracker {
   // Whether an alignment's coarse levels leave the depth rows out: the frame carries depth
   // and the model's own texture leads (DepthModalityOptions::coarse_with_own_texture).
   bool CoarseLevelsWithoutDepth(const Frame& frame) const;
+  // Whether the rendered outline is the object's, so that the background beside it is
+  // estimated and the rim gives photometric rows (PreprocessOptions::background_band_px,
+  // PyramidOptions::rim_px): not for a model whose colours were projected from camera
+  // images onto its surface (an on-line model, or one saved and loaded), a surface with
+  // holes and a partial outline whose outside may be the object itself.
+  bool OutlineIsTheObjects() const { return given_model_->projectors.empty(); }
   // Whether a tracked frame's alignment shows the light changed under the model's own
   // colours (PhotometricOptions::light_change_fit); `has_depth`: the frame carries depth.
   bool LightChanged(const SolveSummary& summary, bool has_depth) const;

@@ -85,11 +85,14 @@ struct PyramidOptions {
   // Photometric equations nearer the rendered silhouette than this (level pixels) follow
   // their linear model in those solves instead of being measured again.
   int resample_margin_px = 4;
-  // Blurred rim around the rendered mask whose pixels give photometric rows, px. None by
-  // default: a rim's rows compare the composed virtual image, whose outside is the input,
-  // and pull towards a smaller model wherever the model's shading differs from the image;
-  // the contour is the region modality's. (Measured on the development and held-out
-  // sequences: 0 is as accurate or better than 3 everywhere, photometric alone included.)
+  // Rim around the rendered mask whose pixels give photometric rows, level pixels, in a
+  // frame's alignment from the predicted pose (not a search's, which starts far off), for a
+  // model whose outline is the object's (not an on-line model's partial surface). Without
+  // PreprocessOptions::background_band_px the rim's virtual image is the input itself: its
+  // rows match at any pose that keeps them outside and pull towards a smaller model
+  // wherever the model's shading differs from the image (0 was as accurate or better than
+  // 3 everywhere). With a band of 2 px, a rim of 2 px lets the camera's blur of the
+  // silhouette give residuals on both of its sides, which cancel: see background_band_px.
   int rim_px = 0;
   // Levels finer than this are rendered 2x2 supersampled, so that the virtual image has the
   // area-averaged silhouette and texture of a camera image (a point-sampled silhouette pasted

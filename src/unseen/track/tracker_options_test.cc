@@ -23,9 +23,18 @@ TEST(TrackerOptions, DefaultsAreTheThesisValues) {
   EXPECT_EQ(o.selection.color_mode, ColorMode::kColorGradientRedundancy);
 }
 
+TEST(TrackerOptions, TheDimFootageConfigEstimatesTheBackgroundBesideTheSilhouette) {
+  const TrackerOptions o =
+      LoadTrackerOptions(std::string(UNSEEN_SOURCE_DIR) + "/configs/tracker/dim_footage.yaml");
+  EXPECT_EQ(o.preprocess.background_band_px, 2);
+  EXPECT_EQ(o.pyramid.rim_px, 2);
+  EXPECT_EQ(TrackerOptions().preprocess.background_band_px, 0);  // not the default
+}
+
 TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
   const TrackerOptions o = ParseTrackerOptions(
-      "preprocess: {use_linf: false, blur_sigma_px: 2.5}\n"
+      "preprocess: {use_linf: false, blur_sigma_px: 2.5, background_band_px: 3,\n"
+      "             background_sigma_px: 4}\n"
       "selection: {color_mode: raw, use_occlusion_rejection: false, block_min_share_ratio: 0}\n"
       "solver: {kernel: tukey, kernel_width: 4.685}\n"
       "pyramid: {max_levels: 2, adaptive_levels: false, min_adaptive_levels: 1, capture_px: 3,\n"
@@ -39,6 +48,8 @@ TEST(TrackerOptions, ParsesYamlOverTheDefaults) {
   EXPECT_FALSE(o.preprocess.use_linf);
   EXPECT_EQ(o.threads, 2);
   EXPECT_DOUBLE_EQ(o.preprocess.blur_sigma_px, 2.5);
+  EXPECT_EQ(o.preprocess.background_band_px, 3);
+  EXPECT_DOUBLE_EQ(o.preprocess.background_sigma_px, 4.0);
   EXPECT_EQ(o.selection.color_mode, ColorMode::kRawColor);
   EXPECT_FALSE(o.selection.use_occlusion_rejection);
   EXPECT_EQ(o.solver.kernel, RobustKernel::kTukey);
@@ -92,6 +103,8 @@ TEST(TrackerOptions, ParsesTheReacquisitionSection) {
   EXPECT_DOUBLE_EQ(r.doubtful_confidence, 0.4);
   EXPECT_DOUBLE_EQ(r.min_seed_shift_px, 2.0);
   EXPECT_TRUE(ParseTrackerOptions("").reacquisition.use_correlation);  // default
+  EXPECT_THROW(ParseTrackerOptions("preprocess: {background_band_px: -1}"), Error);
+  EXPECT_THROW(ParseTrackerOptions("preprocess: {background_sigma_px: 0}"), Error);
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {max_seeds: 0}"), Error);
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {rotation_deg: -5}"), Error);
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {score_levels: 0}"), Error);

@@ -114,6 +114,38 @@ TEST_F(TrackerScene, StartingAtTheTruthStaysThere) {
   EXPECT_EQ(tracker.NumLevelsFor(truth_), 3);  // ~140 px across, >= 32 px at the coarsest
 }
 
+// A camera image is blurrier than a render (optics, compression): at the true pose its
+// pixels beside the silhouette carry the object's colour, and the object's own pixels
+// along it the background's. A virtual image whose outside is the input matches the input
+// outside exactly and not inside, and the photometric solve shrinks the model (moves it
+// away from the camera) to hide the mismatch; with the background beside the silhouette
+// estimated from the input farther out (PreprocessOptions::background_band_px) and the rim
+// giving rows (PyramidOptions::rim_px), the mismatch lies on both sides and the pose stays.
+TEST_F(TrackerScene, ABlurredCameraImageDoesNotPullTheObjectAway) {
+  cv::Mat dark = image_.clone();  // a dim object: the silhouette's contrast dominates
+  const cv::Mat mask = testing::DepthImage(cube_, rig_.cameras[0], truth_, 0.0f) > 0.0f;
+  cv::Mat dimmed = 0.3 * image_;
+  dimmed.copyTo(dark, mask);
+  cv::Mat blurred;
+  cv::GaussianBlur(dark, blurred, cv::Size(), 1.5);
+  TrackerOptions options;
+  options.region.enabled = false;  // the photometric modality's own pull
+  auto away = [&](int band_px, int rim_px) {
+    options.preprocess.background_band_px = band_px;
+    options.pyramid.rim_px = rim_px;
+    Tracker tracker(rig_, cube_, options);
+    tracker.Initialize(truth_);
+    TrackResult r;
+    for (int k = 0; k < 3; ++k) r = tracker.Track({blurred});  // at rest
+    // Along the line of sight, metres (positive: farther than the truth).
+    return (r.world_from_obj.translation() - truth_.translation())
+        .dot(truth_.translation().normalized());
+  };
+  const double input_outside = away(0, 0), estimated_outside = away(2, 2);
+  EXPECT_GT(input_outside, 5e-3);                                // 9.8 mm
+  EXPECT_LT(std::abs(estimated_outside), 0.25 * input_outside);  // 1.3 mm nearer
+}
+
 TEST_F(TrackerScene, AligningCoarseLevelsOnlyJudgesThereAndLearnsNothing) {
   Tracker tracker(rig_, cube_);
   Tracker untouched(rig_, cube_);

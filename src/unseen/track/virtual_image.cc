@@ -3,11 +3,69 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+
+#include <opencv2/imgproc.hpp>
 
 #include "unseen/image/filters.h"
 #include "unseen/util/timer.h"
 
 namespace unseen {
+
+namespace {
+
+// PreprocessOptions::background_band_px, over `area` (the rendered rectangle grown by the
+// band and the blur's reach): `near` is the mask dilated by the band; `weighted` holds the
+// input's pixels beyond the band with weight 1 and the rest with 0, blurred with their
+// weight (BGR * weight, weight), the normalized convolution At() divides out.
+struct BandBackground {
+  BandBackground(const cv::Mat& input_roi, const cv::Mat& mask, const cv::Rect& rendered,
+                 const PreprocessOptions& options) {
+    const int band = options.background_band_px;
+    // (GaussianBlur reaches 4 sigma: the area keeps what the whole region would give.)
+    const int reach = band + static_cast<int>(std::ceil(4.0 * options.background_sigma_px)) + 1;
+    area = cv::Rect(rendered.x - reach, rendered.y - reach, rendered.width + 2 * reach,
+                    rendered.height + 2 * reach) &
+           cv::Rect(0, 0, input_roi.cols, input_roi.rows);
+    cv::dilate(mask(area), near,
+               cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * band + 1, 2 * band + 1)),
+               cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
+    weighted.create(area.size(), CV_32FC4);
+    for (int y = 0; y < area.height; ++y) {
+      const float* in = input_roi.ptr<float>(area.y + y) + 3 * area.x;
+      const uint8_t* n = near.ptr<uint8_t>(y);
+      float* out = weighted.ptr<float>(y);
+      for (int x = 0; x < area.width; ++x) {
+        const float w = n[x] ? 0.0f : 1.0f;
+        for (int k = 0; k < 3; ++k) out[4 * x + k] = w * in[3 * x + k];
+        out[4 * x + 3] = w;
+      }
+    }
+    cv::GaussianBlur(weighted, weighted, cv::Size(), options.background_sigma_px);
+  }
+  // The background at pixel (x, y) of the region (inside `area`), or the input's own pixel
+  // where no input beyond the band lies within reach.
+  void At(const cv::Mat& input_roi, int x, int y, float* bgr) const {
+    const float* b = weighted.ptr<float>(y - area.y) + 4 * (x - area.x);
+    const float* in = input_roi.ptr<float>(y) + 3 * x;
+    for (int k = 0; k < 3; ++k) bgr[k] = b[3] > 1e-3f ? b[k] / b[3] : in[k];
+  }
+  // The virtual image's outside within the band shows the background.
+  void Paste(const cv::Mat& input_roi, VirtualImage* out) const {
+    for (int y = 0; y < area.height; ++y) {
+      const uint8_t* m = out->mask.ptr<uint8_t>(area.y + y) + area.x;
+      const uint8_t* n = near.ptr<uint8_t>(y);
+      float* o = out->composite.ptr<float>(area.y + y);
+      for (int x = 0; x < area.width; ++x) {
+        if (!m[x] && n[x]) At(input_roi, area.x + x, area.y + y, o + 3 * (area.x + x));
+      }
+    }
+  }
+  cv::Rect area;
+  cv::Mat near, weighted;
+};
+
+}  // namespace
 
 void TransferShading(const cv::Mat& input_roi, const PreprocessOptions& options, int level,
                      const cv::Rect& rendered, VirtualImage* out) {
@@ -98,6 +156,9 @@ bool ComposeVirtualImage(const Mesh& model, const PinholeCamera& camera,
     w.coverage.setTo(0);
     w.coverage.setTo(4, w.mask);
     if (options.shading_transfer) TransferShading(input_roi, options, level, sub, &w);
+    if (options.background_band_px > 0) {
+      BandBackground(input_roi, w.mask, sub, options).Paste(input_roi, &w);
+    }
     *compose_ms += timer.ElapsedMilliseconds();
     return true;
   }
@@ -161,41 +222,53 @@ bool ComposeVirtualImage(const Mesh& model, const PinholeCamera& camera,
   const cv::Rect rendered(ox, oy, rw, rh);
   if (options.shading_transfer) TransferShading(input_roi, options, level, rendered, &w);
   const float gamma = static_cast<float>(options.silhouette_gamma);
+  // The uncovered part of a silhouette pixel: the background estimate beyond the band, or
+  // (without a band) the mean of the pixel's uncovered neighbours in the input.
+  std::optional<BandBackground> band;
+  if (options.background_band_px > 0) band.emplace(input_roi, w.mask, rendered, options);
   for (int y = oy; y < oy + rh; ++y) {  // partly covered pixels lie inside the render
     const uint8_t* cov = w.coverage.ptr<uint8_t>(y);
     float* out = w.composite.ptr<float>(y);
     for (int x = ox; x < ox + rw; ++x) {
       const int n = cov[x];
       if (n == 0 || n == 4) continue;
-      float bg[3] = {0, 0, 0};
-      int count = 0;
-      for (int dy = -1; dy <= 1; ++dy) {
-        const int yy = y + dy;
-        if (yy < 0 || yy >= height) continue;
-        const uint8_t* cr = w.coverage.ptr<uint8_t>(yy);
-        const float* ir = input_roi.ptr<float>(yy);
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int xx = x + dx;
-          if (xx < 0 || xx >= width || cr[xx] != 0) continue;
-          for (int k = 0; k < 3; ++k) bg[k] += ir[3 * xx + k];
-          ++count;
+      const float* in = input_roi.ptr<float>(y);
+      float back[3] = {in[3 * x], in[3 * x + 1], in[3 * x + 2]};
+      if (band) {
+        band->At(input_roi, x, y, back);
+      } else {
+        float sum[3] = {0, 0, 0};
+        int count = 0;
+        for (int dy = -1; dy <= 1; ++dy) {
+          const int yy = y + dy;
+          if (yy < 0 || yy >= height) continue;
+          const uint8_t* cr = w.coverage.ptr<uint8_t>(yy);
+          const float* ir = input_roi.ptr<float>(yy);
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int xx = x + dx;
+            if (xx < 0 || xx >= width || cr[xx] != 0) continue;
+            for (int k = 0; k < 3; ++k) sum[k] += ir[3 * xx + k];
+            ++count;
+          }
+        }
+        if (count) {
+          for (int k = 0; k < 3; ++k) back[k] = sum[k] / float(count);
         }
       }
-      const float* in = input_roi.ptr<float>(y);
       const float alpha = 0.25f * n;
       for (int k = 0; k < 3; ++k) {
-        const float back = count ? bg[k] / float(count) : in[3 * x + k];
         if (gamma == 1.0f) {
-          out[3 * x + k] += (1.0f - alpha) * back;
+          out[3 * x + k] += (1.0f - alpha) * back[k];
         } else {  // mix in linear light, as the camera's pixel integrated it
           const float object = std::max(out[3 * x + k] / alpha, 0.0f);
           const float mixed = alpha * std::pow(object, gamma) +
-                              (1.0f - alpha) * std::pow(std::max(back, 0.0f), gamma);
+                              (1.0f - alpha) * std::pow(std::max(back[k], 0.0f), gamma);
           out[3 * x + k] = std::pow(mixed, 1.0f / gamma);
         }
       }
     }
   }
+  if (band) band->Paste(input_roi, &w);
   *compose_ms += timer.ElapsedMilliseconds();
   return true;
 }
