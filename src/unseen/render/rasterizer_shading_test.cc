@@ -19,6 +19,7 @@ namespace {
 
 using render_testing::MakeQuad;
 using render_testing::MakeScreenQuad;
+using render_testing::MakeTiltedQuad;
 using render_testing::MakeSphere;
 using render_testing::PlaneDepth;
 using render_testing::Pose;
@@ -202,8 +203,7 @@ TEST(Rasterizer, ProjectiveTextureFromTheRenderingCameraReproducesTheImage) {
   const Rigid3d cam_from_obj =
       Pose(Eigen::Vector3d(0.1, -0.2, 0.05), Eigen::Vector3d(0.02, 0.01, 1.0));
   // A tilted quad in the object frame, in view.
-  Mesh quad = MakeQuad({{-0.3f, -0.25f, 0.1f}, {-0.3f, 0.25f, 0.0f}, {0.3f, 0.25f, -0.1f},
-                        {0.3f, -0.25f, 0.0f}});
+  Mesh quad = MakeTiltedQuad();
   Projector projector;
   projector.camera = cam;
   projector.cam_from_obj = cam_from_obj;
@@ -253,8 +253,7 @@ TEST(Rasterizer, QuadShadingColoursEachWholeBlockOnceAndTheRestPerSample) {
   const Rigid3d cam_from_obj =
       Pose(Eigen::Vector3d(0.3, -0.2, 0.05), Eigen::Vector3d(0.02, 0.01, 1.0));
   // Two tilted triangles, colours affine in the 3-D position.
-  Mesh quad = MakeQuad({{-0.3f, -0.25f, 0.1f}, {-0.3f, 0.25f, 0.0f}, {0.3f, 0.25f, -0.1f},
-                        {0.3f, -0.25f, 0.0f}});
+  Mesh quad = MakeTiltedQuad();
   for (const Eigen::Vector3f& v : quad.vertices) {
     quad.colors_bgr.push_back(Eigen::Vector3f(0.5f + v.x(), 0.5f + v.y(), 0.5f + 2.0f * v.z()));
   }

@@ -35,6 +35,13 @@ inline Mesh MakeQuad(const std::vector<Eigen::Vector3f>& corners) {
   return m;
 }
 
+// A 0.6 x 0.5 m quad tilted about both axes (z from 0.1 to -0.1 across it), in the object
+// frame.
+inline Mesh MakeTiltedQuad() {
+  return MakeQuad({{-0.3f, -0.25f, 0.1f}, {-0.3f, 0.25f, 0.0f}, {0.3f, 0.25f, -0.1f},
+                   {0.3f, -0.25f, 0.0f}});
+}
+
 // A camera-facing quad at depth z covering pixel rectangle [u0, u1] x [v0, v1] (pixels).
 // Seen from the camera, counter-clockwise with y down means: top-left, bottom-left,
 // bottom-right, top-right.

@@ -3,6 +3,7 @@
 // The region (silhouette) modality's parts on their own: the colour histograms, and which
 // lines across the contour give rows (none across an occluder, none whose colours leave the
 // image's edge).
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -67,6 +68,17 @@ struct SquareScene {
   cv::Mat image, mask, depth;
 };
 
+// The largest offset (a row's right-hand side, px) the region modality's rows of `in` ask
+// for, with `histograms` as learnt.
+float LargestRowOffset(const RegionModalityInput& in, const RegionModalityOptions& options,
+                       ColorHistograms* histograms, RegionCounts* counts) {
+  FlowEquations rows;
+  AddRegionEquations(in, options, /*learn=*/false, histograms, &rows, counts);
+  float largest = 0.0f;
+  for (float b : rows.rhs) largest = std::max(largest, std::abs(b));
+  return largest;
+}
+
 // A square red object on grey; an occluder coloured like the background covers the square's
 // right edge. Its lines see background where the object should be and pull the contour in by
 // several standard deviations; with the occluder's blocks marked (as the photometric
@@ -91,11 +103,7 @@ TEST(RegionModality, LinesAcrossAnOccluderAreLeftOut) {
   auto largest_offset = [&](bool mark, RegionCounts* counts) {
     in.occluded_blocks = mark ? &occluded : nullptr;
     in.occluded_block_px = mark ? block : 0;
-    FlowEquations rows;
-    AddRegionEquations(in, options, /*learn=*/false, &histograms, &rows, counts);
-    float largest = 0.0f;
-    for (float b : rows.rhs) largest = std::max(largest, std::abs(b));
-    return largest;
+    return LargestRowOffset(in, options, &histograms, counts);
   };
   RegionCounts unmarked, marked;
   EXPECT_GT(largest_offset(false, &unmarked), 3.0f);
@@ -130,11 +138,7 @@ TEST(RegionModality, LinesWhoseColoursLeaveTheImagesEdgeGiveNoRow) {
 
   auto largest_offset = [&](double contradiction_px, RegionCounts* counts) {
     options.edge_contradiction_px = contradiction_px;
-    FlowEquations rows;
-    AddRegionEquations(in, options, /*learn=*/false, &histograms, &rows, counts);
-    float largest = 0.0f;
-    for (float b : rows.rhs) largest = std::max(largest, std::abs(b));
-    return largest;
+    return LargestRowOffset(in, options, &histograms, counts);
   };
   RegionCounts off, on;
   EXPECT_GT(largest_offset(0.0, &off), 6.0f);

@@ -105,7 +105,6 @@ struct Tracker::CameraWork {
   PreprocessedImage input_pre, virtual_pre;
   bool virtual_ok = false;  // the last PrepareVirtual rendered something
   bool input_stale = false; // input_roi changed since input_pre was computed
-  int rim_px = 0;            // the current alignment's rim (PyramidOptions::rim_px)
   // This camera's share of the current alignment; the input's pre-processing apart, as it
   // may run beside the virtual image's.
   StageTimes times;
@@ -365,8 +364,8 @@ bool Tracker::RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int l
                              &w.times.render_ms, &w.times.preprocess_ms);
 }
 
-bool Tracker::PrepareVirtual(const Rigid3d& cam_from_obj, int level, ThreadPool* render_pool,
-                             CameraWork* work) const {
+bool Tracker::PrepareVirtual(const Rigid3d& cam_from_obj, int level, int rim_px,
+                             ThreadPool* render_pool, CameraWork* work) const {
   CameraWork& w = *work;
   const PyramidOptions& po = options_.pyramid;
   if (!RenderVirtual(cam_from_obj, level < po.supersampled_levels, level, render_pool, &w)) {
@@ -377,7 +376,6 @@ bool Tracker::PrepareVirtual(const Rigid3d& cam_from_obj, int level, ThreadPool*
     Preprocess(w.virtual_image.composite, options_.preprocess, level, true, &w.virtual_pre);
   }
   // Mask and its rim; depth of the rim from the nearest surface.
-  const int rim_px = w.rim_px;
   if (rim_px > 0) {
     const cv::Mat rim_kernel =
         cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * rim_px + 1, 2 * rim_px + 1));
@@ -440,7 +438,6 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
   // beside a wrong outline with whatever texture lies there and swamps the texture's rows
   // (a cube found again at a proposed orientation: never, with a rim of 2 px).
   const int rim_px = OutlineIsTheObjects() && span.tracking ? po.rim_px : 0;
-  for (auto& w : work_) w->rim_px = rim_px;
   int margin = static_cast<int>(std::ceil(3.0 * options_.preprocess.blur_sigma_px)) + rim_px + 2;
   if (options_.region.enabled) margin = std::max(margin, options_.region.line_px + 2);
   const bool input_gradients = options_.selection.use_occlusion_rejection;
@@ -544,7 +541,8 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
         const int c = jobs[j] % ncam;
         CameraWork& w = *work_[c];
         if (jobs[j] < ncam) {
-          w.virtual_ok = PrepareVirtual(cam_from_world_[c] * round_pose, level, render_pool, &w);
+          w.virtual_ok = PrepareVirtual(cam_from_world_[c] * round_pose, level, rim_px,
+                                        render_pool, &w);
         } else {
           Timer input_timer;
           Preprocess(w.input_roi, options_.preprocess, level, input_gradients, &w.input_pre);

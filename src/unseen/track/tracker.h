@@ -289,8 +289,8 @@ class Tracker {
   bool RenderVirtual(const Rigid3d& cam_from_obj, bool supersample, int level,
                      ThreadPool* render_pool, CameraWork* work) const;
   // RenderVirtual, then the virtual image's pre-processing and the region used (mask and
-  // rim) with its depth.
-  bool PrepareVirtual(const Rigid3d& cam_from_obj, int level, ThreadPool* render_pool,
+  // its rim of `rim_px` level pixels) with its depth.
+  bool PrepareVirtual(const Rigid3d& cam_from_obj, int level, int rim_px, ThreadPool* render_pool,
                       CameraWork* work) const;
   // fn(0) ... fn(n - 1) on the pool's threads, or in order without a pool.
   void RunParallel(int n, const std::function<void(int)>& fn);
