@@ -105,13 +105,15 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
   const float origin[3] = {float(in.origin_in_cam.x()), float(in.origin_in_cam.y()),
                            float(in.origin_in_cam.z())};
   SelectionCounts c;
+  SelectionCounts rim;  // the rim's tallies, not reported
   float row[6];
   // Per block: gradient pixels and used pixels.
   const int block = options.block_px;
   const int block_cols = (w + block - 1) / block, block_rows = (h + block - 1) / block;
   std::vector<int> block_gradient(block_cols * block_rows, 0);
-  std::vector<int> block_used(block_cols * block_rows, 0);
   std::vector<int> block_passed(block_cols * block_rows, 0);  // passed (4.13)-(4.15)
+  std::vector<int> own_gradient(block_cols * block_rows, 0);
+  std::vector<int> own_used(block_cols * block_rows, 0);
   const int first_row = out->size();
   const size_t first_sample = samples ? samples->size() : 0;
   std::vector<int> row_block;  // block of each row appended here
@@ -122,8 +124,9 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
 
   for (int y = 0; y < h; ++y) {
     int* row_gradient = block_gradient.data() + (y / block) * block_cols;
-    int* row_used = block_used.data() + (y / block) * block_cols;
     int* row_passed = block_passed.data() + (y / block) * block_cols;
+    int* row_own_gradient = own_gradient.data() + (y / block) * block_cols;
+    int* row_own_used = own_used.data() + (y / block) * block_cols;
     const uint8_t* reg = in.region->ptr<uint8_t>(y);
     const float* dep = in.depth->ptr<float>(y);
     const float* vb = v.blurred.ptr<float>(y);
@@ -147,8 +150,9 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
       ++c.equations;
     };
     auto count_used = [&](int x) {
+      if (reg[x] != kObjectPixel) return;
       ++c.used;
-      ++row_used[x / block];
+      ++row_own_used[x / block];
     };
     const float* vgx = v.gx.ptr<float>(y);
     const float* vgy = v.gy.ptr<float>(y);
@@ -160,7 +164,11 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
       if (!reg[x]) continue;
       const float z = dep[x];
       if (!(z > 0.0f)) continue;
-      ++c.candidates;
+      // A rim pixel gives rows, and joins its block's occlusion test; the counts, and the
+      // confidence that reads them, see the object's own pixels only.
+      const bool own = reg[x] == kObjectPixel;
+      SelectionCounts& tally = own ? c : rim;
+      ++tally.candidates;
       const int k = 3 * x;
       const float gx[3] = {vgx[k], vgx[k + 1], vgx[k + 2]};
       const float gy[3] = {vgy[k], vgy[k + 1], vgy[k + 2]};
@@ -199,10 +207,11 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
           break;
       }
       if (!gradient_ok) {
-        ++c.rejected_gradient;
+        ++tally.rejected_gradient;
         continue;
       }
       ++row_gradient[x / block];
+      if (own) ++row_own_gradient[x / block];
 
       // (4.13)-(4.15) occlusion rejection, per channel.
       if (occlusion) {
@@ -223,15 +232,15 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
           }
         }
         if (!input_ok) {
-          ++c.rejected_input_gradient;
+          ++tally.rejected_input_gradient;
           continue;
         }
         if (!direction_ok) {
-          ++c.rejected_direction;
+          ++tally.rejected_direction;
           continue;
         }
         if (std::abs(std::sqrt(mag_v) - std::sqrt(mag_i)) >= tmd) {
-          ++c.rejected_magnitude;
+          ++tally.rejected_magnitude;
           continue;
         }
         ++row_passed[x / block];
@@ -243,7 +252,7 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
           const float l1 = 0.5f * (a + d) + std::sqrt(0.25f * (a - d) * (a - d) + cc * cc);
           const float l2 = std::max(a + d - l1, 0.0f);
           if (l1 < ratio * l2) {
-            ++c.rejected_undirected;
+            ++tally.rejected_undirected;
             continue;
           }
           const bool by_y = d > a;
@@ -258,7 +267,7 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
           }
           const float g2 = sgx * sgx + sgy * sgy;
           if (!(g2 > 0.0f) || (options.use_normal_flow_bound && sit * sit >= tvmax_sq * g2)) {
-            ++c.rejected_normal_flow;
+            ++tally.rejected_normal_flow;
             continue;
           }
           FlowRowInCamera(fx, fy, cx, cy, origin, px, py, z, sgx, sgy, row);
@@ -275,7 +284,7 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
           }
           const float g2 = ggx * ggx + ggy * ggy;
           if (options.use_normal_flow_bound && git * git >= tvmax_sq * g2) {
-            ++c.rejected_normal_flow;
+            ++tally.rejected_normal_flow;
             continue;
           }
           FlowRowInCamera(fx, fy, cx, cy, origin, px, py, z, ggx, ggy, row);
@@ -299,7 +308,7 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
             ++added;
           }
           if (added == 0) {
-            if (flow_rejected) ++c.rejected_normal_flow;
+            if (flow_rejected) ++tally.rejected_normal_flow;
             continue;
           }
           count_used(x);
@@ -308,10 +317,10 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
       }
     }
   }
-  for (size_t b = 0; b < block_gradient.size(); ++b) {
-    if (block_gradient[b] < options.block_min_gradient) continue;
-    c.block_share_sum += double(block_used[b]) * block_used[b] / block_gradient[b];
-    c.block_used += block_used[b];
+  for (size_t b = 0; b < own_gradient.size(); ++b) {
+    if (own_gradient[b] < options.block_min_gradient) continue;
+    c.block_share_sum += double(own_used[b]) * own_used[b] / own_gradient[b];
+    c.block_used += own_used[b];
   }
   if (occlusion && options.block_min_share_ratio > 0.0) {
     // Shares of the occlusion tests alone: a misalignment also fails the normal-flow bound
@@ -332,9 +341,9 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
                   float(block_passed[b]) < min_share * float(block_gradient[b]);
         if (drop[b]) {
           if (occluded_blocks) occluded_blocks->data[b] = 255;
-          c.occluded_gradient += block_gradient[b];
-          c.rejected_block += block_used[b];
-          c.used -= block_used[b];
+          c.occluded_gradient += own_gradient[b];
+          c.rejected_block += own_used[b];
+          c.used -= own_used[b];
         }
       }
       int kept = first_row;

@@ -6,6 +6,7 @@
 // consistency tests, and turn each into a row of the 6-DoF optical-flow equation (3.1.1).
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include <Eigen/Core>
@@ -59,9 +60,17 @@ struct PixelSelectionOptions {
   void Check() const;
 };
 
-// How many pixels each test saw and rejected (summed over cameras/levels as needed).
+// SelectionInput::region's values: the rendered object's own pixels, and those of a rim
+// outside its silhouette (PyramidOptions::rim_px) that give rows to the solve but are not
+// counted: the counts and the blocks below, and all that judges the pose by them, see the
+// object's own pixels only, with or without a rim.
+constexpr uint8_t kObjectPixel = 255;
+constexpr uint8_t kRimPixel = 128;
+
+// How many of the object's pixels each test saw and rejected (summed over cameras/levels
+// as needed); SelectionCounts::equations counts the rim's rows too.
 struct SelectionCounts {
-  long candidates = 0;               // mask + rim pixels with a depth
+  long candidates = 0;               // object pixels (kObjectPixel) with a depth
   long rejected_gradient = 0;        // (4.8)
   long rejected_input_gradient = 0;  // (4.13)
   long rejected_direction = 0;       // (4.14)
@@ -98,7 +107,7 @@ struct SelectionCounts {
 struct SelectionInput {
   const PreprocessedImage* virtual_image = nullptr;  // with gradients
   const PreprocessedImage* input_image = nullptr;    // gradients needed for occlusion tests
-  const cv::Mat* region = nullptr;  // CV_8UC1, non-zero where pixels may be used
+  const cv::Mat* region = nullptr;  // CV_8UC1: kObjectPixel, kRimPixel, 0 where unused
   const cv::Mat* depth = nullptr;   // CV_32FC1, metres, camera-frame z (> 0 where usable)
   PixelRect roi;                    // level pixels: buffer (0, 0) is pixel (roi.x0, roi.y0)
   PinholeCamera camera;             // the level's camera

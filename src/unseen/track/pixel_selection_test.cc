@@ -98,6 +98,30 @@ TEST(PixelSelection, ColourGradientRedundancyKeepsIsoluminantEdgesThatGreyLoses)
   EXPECT_EQ(raw.candidates, redundancy.candidates);
 }
 
+TEST(PixelSelection, ARimGivesRowsButLeavesTheObjectsCountsAlone) {
+  // The edge at column 32 lies on the rim: the object's pixels end at column 31.
+  const Scene scene = EdgeScene(32.0, 32.5, cv::Vec3f(0.2f, 0.3f, 0.4f), cv::Vec3f(0.7f, 0.6f, 0.5f));
+  cv::Mat object(48, 64, CV_8UC1, cv::Scalar(0));
+  object(cv::Rect(8, 8, 24, 32)).setTo(kObjectPixel);
+  cv::Mat with_rim = object.clone();
+  with_rim(cv::Rect(32, 8, 4, 32)).setTo(kRimPixel);
+  cv::Mat as_object = object.clone();
+  as_object(cv::Rect(32, 8, 4, 32)).setTo(kObjectPixel);
+  PreprocessOptions pre;
+  pre.use_linf = false;
+  const PixelSelectionOptions options;
+  const SelectionCounts alone = Select(scene, options, pre, object);
+  const SelectionCounts rim = Select(scene, options, pre, with_rim);
+  const SelectionCounts widened = Select(scene, options, pre, as_object);
+  ASSERT_GT(alone.used, 32);
+  EXPECT_GT(rim.equations, alone.equations + 32);  // the rim's columns gave rows
+  EXPECT_EQ(rim.equations, widened.equations);
+  EXPECT_EQ(rim.candidates, alone.candidates);
+  EXPECT_EQ(rim.used, alone.used);
+  EXPECT_EQ(rim.gradient_pixels(), alone.gradient_pixels());
+  EXPECT_GT(widened.used, alone.used);  // the same pixels counted as the object's
+}
+
 TEST(PixelSelection, OcclusionRejectionRemovesAnOccludersPixels) {
   cv::RNG rng(11);
   cv::Mat small(12, 16, CV_32FC3);

@@ -380,6 +380,7 @@ bool Tracker::PrepareVirtual(const Rigid3d& cam_from_obj, int level, int rim_px,
     const cv::Mat rim_kernel =
         cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * rim_px + 1, 2 * rim_px + 1));
     cv::dilate(w.virtual_image.mask, w.region, rim_kernel);
+    w.region.setTo(kRimPixel, w.region != w.virtual_image.mask);
     cv::dilate(w.virtual_image.depth, w.depth_used, rim_kernel);
     w.virtual_image.depth.copyTo(w.depth_used, w.virtual_image.mask);
   } else {
