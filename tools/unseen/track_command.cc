@@ -194,7 +194,9 @@ void RunTrack(const TrackArgs& args) {
   Tracker tracker(sequence.rig(), std::move(model), tracker_options);
   // A known model: a lost object found again by correlation is also tried in the
   // orientations its views match there (an on-line model changes, its views would not).
-  if (!args.unknown) tracker.SetPoseProposer(ViewBankProposer(&tracker));
+  if (!args.unknown) {
+    tracker.SetPoseProposer(ViewBankProposer(&tracker, {}, ViewBankBuild::kInBackground));
+  }
   // --init auto: the first frame is the one where the model was found (its result is the
   // search's; the tracker starts at that pose with the next frame).
   std::optional<KnownObjectStart> found;

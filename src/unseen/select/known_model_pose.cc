@@ -1,10 +1,13 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 #include "unseen/select/known_model_pose.h"
 
-#include <fmt/format.h>
+#include <sys/resource.h>
 
+#include <future>
 #include <memory>
+#include <utility>
 
+#include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
 #include "unseen/render/rasterizer.h"
@@ -51,6 +54,10 @@ KnownModelPoser::KnownModelPoser(Tracker* tracker, const KnownModelPoseOptions& 
     : tracker_(*tracker),
       options_((options.Check(), options)),
       views_(tracker->given_model(), options.views) {}
+
+KnownModelPoser::KnownModelPoser(Tracker* tracker, ViewBank views,
+                                 const KnownModelPoseOptions& options)
+    : tracker_(*tracker), options_((options.Check(), options)), views_(std::move(views)) {}
 
 std::vector<Rigid3d> KnownModelPoser::Candidates(const Frame& frame, int camera,
                                                  const PixelRect& box) const {
@@ -132,15 +139,44 @@ PixelRect SilhouetteBox(const Mesh& model, const PinholeCamera& camera,
           buffers.roi.x0 + bounds.x + bounds.width, buffers.roi.y0 + bounds.y + bounds.height};
 }
 
-PoseProposer ViewBankProposer(Tracker* tracker, const KnownModelPoseOptions& options) {
+PoseProposer ViewBankProposer(Tracker* tracker, const KnownModelPoseOptions& options,
+                              ViewBankBuild build) {
   options.Check();
   UNSEEN_CHECK(tracker != nullptr, "ViewBankProposer: no tracker");
+  // The views, rendered now on a thread of their own or later at the first call. The
+  // thread holds the model it renders (the tracker may be given another meanwhile), and
+  // the last copy of the proposer waits for it (std::async's future).
+  using Views = std::shared_ptr<ViewBank>;
+  std::shared_future<Views> background;
+  if (build == ViewBankBuild::kInBackground) {
+    background =
+        std::async(std::launch::async, [model = tracker->shared_given_model(),
+                                        views = options.views] {
+          // Beside tracking, not in its way: the lowest priority for this thread and the
+          // ones it starts (Linux's nice value is theirs, not the process's).
+          setpriority(PRIO_PROCESS, 0, 19);
+          Timer timer;
+          auto bank = std::make_shared<ViewBank>(*model, views);
+          UNSEEN_LOG_INFO("view-bank proposals: {} views rendered in {:.0f} ms beside tracking",
+                          bank->size(), timer.ElapsedMilliseconds());
+          return bank;
+        }).share();
+  }
   auto poser = std::make_shared<std::shared_ptr<const KnownModelPoser>>();
   auto failed = std::make_shared<bool>(false);
-  return [tracker, options, poser, failed](const Frame& frame, int camera, const PixelRect& box) {
+  return [tracker, options, poser, failed, background](const Frame& frame, int camera,
+                                                        const PixelRect& box) {
     if (*failed) return std::vector<Rigid3d>();
     try {
-      if (!*poser) {
+      if (!*poser && background.valid()) {
+        Timer timer;
+        ViewBank views = std::move(*background.get());
+        if (timer.ElapsedMilliseconds() >= 1.0) {
+          UNSEEN_LOG_INFO("view-bank proposals: waited {:.0f} ms for the views",
+                          timer.ElapsedMilliseconds());
+        }
+        *poser = std::make_shared<const KnownModelPoser>(tracker, std::move(views), options);
+      } else if (!*poser) {
         Timer timer;
         *poser = std::make_shared<const KnownModelPoser>(tracker, options);
         UNSEEN_LOG_INFO("view-bank proposals: {} views rendered in {:.0f} ms",

@@ -67,6 +67,9 @@ class KnownModelPoser {
   // Renders the views of `tracker`'s model (which must outlive this, as must `tracker`).
   // Throws unseen::Error for invalid options.
   KnownModelPoser(Tracker* tracker, const KnownModelPoseOptions& options = {});
+  // The same with the views of `tracker`'s given model already rendered (options.views
+  // as they were rendered with).
+  KnownModelPoser(Tracker* tracker, ViewBank views, const KnownModelPoseOptions& options = {});
 
   // The object whose silhouette's bounding box in camera `camera` (rig index) of `frame`
   // is `box`. Each candidate is tracked in `frame` from scratch (Tracker::Initialize, then
@@ -94,14 +97,21 @@ PixelRect SilhouetteBox(const Mesh& model, const PinholeCamera& camera,
                         const Rigid3d& cam_from_obj);
 
 // A pose proposer for `tracker`'s re-acquisition (Tracker::SetPoseProposer): the start poses
-// of a KnownModelPoser of its given model (KnownModelPoser::Candidates), whose views are
-// rendered at the first call (a tracker that never loses its object pays nothing; the
-// default bank's 4 800 views take 1.1 s on one core, 0.53 s on two (ViewBankOptions::
-// threads): a stall at the first loss.
-// 8 in-plane turns instead of 16 halve it, but then the lettered cube's true orientation
-// was not among the first four proposals).
-// `tracker` must outlive it (held by the tracker itself, it does) and keep its given model;
-// no proposals (empty) when its views cannot be made.
-PoseProposer ViewBankProposer(Tracker* tracker, const KnownModelPoseOptions& options = {});
+// of a KnownModelPoser of its given model (KnownModelPoser::Candidates). The default bank's
+// 4 800 views take 1.1 s on one core, 0.53 s on two (ViewBankOptions::threads; 8 in-plane
+// turns instead of 16 halve that, but then the lettered cube's true orientation was not
+// among the first four proposals). `build` says when they are rendered:
+//  * kAtFirstUse: at the first call. A tracker that never loses its object pays nothing;
+//    one that does stalls for that long at its first loss.
+//  * kInBackground: at once, on threads of their own (ViewBankOptions::threads) at the
+//    lowest priority, beside tracking and not in its way; the first call waits only for
+//    what is not done yet (then with every core). The same proposals, without the stall
+//    when the first loss comes after about a second (the command line's choice).
+// `tracker` must outlive it (held by the tracker itself, it does); the views are those of
+// the model the tracker was given when the proposer was made. No proposals (empty) when
+// the views cannot be made.
+enum class ViewBankBuild { kAtFirstUse, kInBackground };
+PoseProposer ViewBankProposer(Tracker* tracker, const KnownModelPoseOptions& options = {},
+                              ViewBankBuild build = ViewBankBuild::kAtFirstUse);
 
 }  // namespace unseen

@@ -100,7 +100,8 @@ TEST(PixelSelection, ColourGradientRedundancyKeepsIsoluminantEdgesThatGreyLoses)
 
 TEST(PixelSelection, ARimGivesRowsButLeavesTheObjectsCountsAlone) {
   // The edge at column 32 lies on the rim: the object's pixels end at column 31.
-  const Scene scene = EdgeScene(32.0, 32.5, cv::Vec3f(0.2f, 0.3f, 0.4f), cv::Vec3f(0.7f, 0.6f, 0.5f));
+  const Scene scene =
+      EdgeScene(32.0, 32.5, cv::Vec3f(0.2f, 0.3f, 0.4f), cv::Vec3f(0.7f, 0.6f, 0.5f));
   cv::Mat object(48, 64, CV_8UC1, cv::Scalar(0));
   object(cv::Rect(8, 8, 24, 32)).setTo(kObjectPixel);
   cv::Mat with_rim = object.clone();

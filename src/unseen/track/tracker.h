@@ -168,6 +168,7 @@ class Tracker {
   std::shared_ptr<const Mesh> shared_model() const { return model_; }
   // The model as given (constructor, SetModel), without live textures.
   const Mesh& given_model() const { return *given_model_; }
+  std::shared_ptr<const Mesh> shared_given_model() const { return given_model_; }
   const TrackerOptions& options() const { return options_; }
   const MotionPredictor& predictor() const { return *predictor_; }
   bool initialized() const { return initialized_; }
