@@ -107,7 +107,9 @@ void SelectPixels(const SelectionInput& in, const PixelSelectionOptions& options
   SelectionCounts c;
   SelectionCounts rim;  // the rim's tallies, not reported
   float row[6];
-  // Per block: gradient pixels and used pixels.
+  // Per block: gradient pixels and those that passed the occlusion tests, rim included
+  // (what decides a block's occlusion: a block mostly of rim may be dropped), and the
+  // object's own gradient and used pixels (what the counts report).
   const int block = options.block_px;
   const int block_cols = (w + block - 1) / block, block_rows = (h + block - 1) / block;
   std::vector<int> block_gradient(block_cols * block_rows, 0);

@@ -78,7 +78,7 @@ struct SelectionCounts {
   long rejected_undirected = 0;      // 3.6, lambda1 / lambda2 below the ratio
   long rejected_normal_flow = 0;     // (4.9)
   long rejected_block = 0;           // in a block that mostly failed the tests
-  long occluded_gradient = 0;        // gradient pixels of those blocks (all of them)
+  long occluded_gradient = 0;        // the object's gradient pixels in those blocks (all)
   long used = 0;                     // pixels that gave at least one equation
   long equations = 0;
   // Over the counted blocks b (PixelSelectionOptions::block_px): the sum of used_b^2 /

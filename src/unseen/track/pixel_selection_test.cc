@@ -120,6 +120,12 @@ TEST(PixelSelection, ARimGivesRowsButLeavesTheObjectsCountsAlone) {
   EXPECT_EQ(rim.candidates, alone.candidates);
   EXPECT_EQ(rim.used, alone.used);
   EXPECT_EQ(rim.gradient_pixels(), alone.gradient_pixels());
+  EXPECT_EQ(rim.rejected_input_gradient + rim.rejected_direction + rim.rejected_magnitude +
+                rim.rejected_undirected + rim.rejected_normal_flow + rim.rejected_block,
+            alone.rejected_input_gradient + alone.rejected_direction + alone.rejected_magnitude +
+                alone.rejected_undirected + alone.rejected_normal_flow + alone.rejected_block);
+  EXPECT_EQ(rim.block_used, alone.block_used);
+  EXPECT_DOUBLE_EQ(rim.block_share_sum, alone.block_share_sum);
   EXPECT_GT(widened.used, alone.used);  // the same pixels counted as the object's
 }
 
