@@ -3,8 +3,12 @@
 
 #include <sys/resource.h>
 
+#include <atomic>
+#include <chrono>
+#include <exception>
 #include <future>
 #include <memory>
+#include <system_error>
 #include <utility>
 
 #include <fmt/format.h>
@@ -57,7 +61,9 @@ KnownModelPoser::KnownModelPoser(Tracker* tracker, const KnownModelPoseOptions& 
 
 KnownModelPoser::KnownModelPoser(Tracker* tracker, ViewBank views,
                                  const KnownModelPoseOptions& options)
-    : tracker_(*tracker), options_((options.Check(), options)), views_(std::move(views)) {}
+    : tracker_(*tracker), options_((options.Check(), options)), views_(std::move(views)) {
+  options_.views = views_.options();  // as they were rendered
+}
 
 std::vector<Rigid3d> KnownModelPoser::Candidates(const Frame& frame, int camera,
                                                  const PixelRect& box) const {
@@ -139,52 +145,85 @@ PixelRect SilhouetteBox(const Mesh& model, const PinholeCamera& camera,
           buffers.roi.x0 + bounds.x + bounds.width, buffers.roi.y0 + bounds.y + bounds.height};
 }
 
+BackgroundViewBank::BackgroundViewBank(std::shared_ptr<const Mesh> model,
+                                       const ViewBankOptions& options) {
+  UNSEEN_CHECK(model != nullptr, "BackgroundViewBank: no model");
+  options.Check();
+  try {
+    done_ = std::async(std::launch::async, [this, model = std::move(model), options] {
+      // Beside tracking, not in its way: the lowest priority for this thread and the ones
+      // it starts (Linux's nice value is theirs, not the process's).
+      setpriority(PRIO_PROCESS, 0, 19);
+      Timer timer;
+      auto bank = std::make_shared<ViewBank>(*model, options, &cancel_);
+      UNSEEN_LOG_INFO("view-bank proposals: {} views rendered in {:.0f} ms beside tracking",
+                      bank->size(), timer.ElapsedMilliseconds());
+      return bank;
+    });
+  } catch (const std::system_error& e) {  // no thread to be had: TakeIfDone gives nothing
+    UNSEEN_LOG_INFO("view-bank proposals: no thread to render them beside tracking ({})", e.what());
+  }
+}
+
+BackgroundViewBank::~BackgroundViewBank() {
+  cancel_ = true;
+  if (done_.valid()) done_.wait();
+}
+
+void BackgroundViewBank::Wait() const {
+  if (done_.valid()) done_.wait();
+}
+
+std::shared_ptr<ViewBank> BackgroundViewBank::TakeIfDone() {
+  if (!done_.valid()) return nullptr;
+  if (done_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
+    cancel_ = true;
+    done_.wait();
+  }
+  try {
+    return done_.get();
+  } catch (const std::exception& e) {  // cancelled, or the views could not be made
+    UNSEEN_LOG_DEBUG("view-bank proposals: the render beside tracking gave none: {}", e.what());
+    return nullptr;
+  }
+}
+
 PoseProposer ViewBankProposer(Tracker* tracker, const KnownModelPoseOptions& options,
                               ViewBankBuild build) {
+  UNSEEN_CHECK(tracker != nullptr, "ViewBankProposer: no tracker");
+  std::shared_ptr<BackgroundViewBank> background;
+  if (build == ViewBankBuild::kInBackground) {
+    background = std::make_shared<BackgroundViewBank>(tracker->shared_given_model(), options.views);
+  }
+  return ViewBankProposer(tracker, options, std::move(background));
+}
+
+PoseProposer ViewBankProposer(Tracker* tracker, const KnownModelPoseOptions& options,
+                              std::shared_ptr<BackgroundViewBank> background) {
   options.Check();
   UNSEEN_CHECK(tracker != nullptr, "ViewBankProposer: no tracker");
-  // The views, rendered now on a thread of their own or later at the first call. The
-  // thread holds the model it renders (the tracker may be given another meanwhile), and
-  // the last copy of the proposer waits for it (std::async's future).
-  using Views = std::shared_ptr<ViewBank>;
-  std::shared_future<Views> background;
-  if (build == ViewBankBuild::kInBackground) {
-    background =
-        std::async(std::launch::async, [model = tracker->shared_given_model(),
-                                        views = options.views] {
-          // Beside tracking, not in its way: the lowest priority for this thread and the
-          // ones it starts (Linux's nice value is theirs, not the process's).
-          setpriority(PRIO_PROCESS, 0, 19);
-          Timer timer;
-          auto bank = std::make_shared<ViewBank>(*model, views);
-          UNSEEN_LOG_INFO("view-bank proposals: {} views rendered in {:.0f} ms beside tracking",
-                          bank->size(), timer.ElapsedMilliseconds());
-          return bank;
-        }).share();
-  }
+  // All copies of the proposer share `poser`: the first call makes it, the others use it.
+  // Not for concurrent calls.
   auto poser = std::make_shared<std::shared_ptr<const KnownModelPoser>>();
   auto failed = std::make_shared<bool>(false);
   return [tracker, options, poser, failed, background](const Frame& frame, int camera,
-                                                        const PixelRect& box) {
+                                                       const PixelRect& box) {
     if (*failed) return std::vector<Rigid3d>();
     try {
-      if (!*poser && background.valid()) {
+      if (!*poser) {
         Timer timer;
-        ViewBank views = std::move(*background.get());
-        if (timer.ElapsedMilliseconds() >= 1.0) {
-          UNSEEN_LOG_INFO("view-bank proposals: waited {:.0f} ms for the views",
+        const std::shared_ptr<ViewBank> done = background ? background->TakeIfDone() : nullptr;
+        if (done) {
+          *poser = std::make_shared<const KnownModelPoser>(tracker, std::move(*done), options);
+        } else {
+          *poser = std::make_shared<const KnownModelPoser>(tracker, options);
+          UNSEEN_LOG_INFO("view-bank proposals: {} views rendered in {:.0f} ms",
+                          options.views.num_directions * options.views.num_rolls,
                           timer.ElapsedMilliseconds());
         }
-        *poser = std::make_shared<const KnownModelPoser>(tracker, std::move(views), options);
-      } else if (!*poser) {
-        Timer timer;
-        *poser = std::make_shared<const KnownModelPoser>(tracker, options);
-        UNSEEN_LOG_INFO("view-bank proposals: {} views rendered in {:.0f} ms",
-                        options.views.num_directions * options.views.num_rolls,
-                        timer.ElapsedMilliseconds());
       }
       return (*poser)->Candidates(frame, camera, box);
-    } catch (const Error& e) {
+    } catch (const std::exception& e) {
       *failed = !*poser;  // the views could not be made: no proposals from now on
       UNSEEN_LOG_INFO("view-bank proposals: none: {}", e.what());
       return std::vector<Rigid3d>();

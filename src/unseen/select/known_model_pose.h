@@ -11,6 +11,9 @@
 // in-plane rotations, the silhouette cue, several candidates verified by the tracker.
 #pragma once
 
+#include <atomic>
+#include <future>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -100,18 +103,49 @@ PixelRect SilhouetteBox(const Mesh& model, const PinholeCamera& camera,
 // of a KnownModelPoser of its given model (KnownModelPoser::Candidates). The default bank's
 // 4 800 views take 1.1 s on one core, 0.53 s on two (ViewBankOptions::threads; 8 in-plane
 // turns instead of 16 halve that, but then the lettered cube's true orientation was not
-// among the first four proposals). `build` says when they are rendered:
-//  * kAtFirstUse: at the first call. A tracker that never loses its object pays nothing;
-//    one that does stalls for that long at its first loss.
-//  * kInBackground: at once, on threads of their own (ViewBankOptions::threads) at the
-//    lowest priority, beside tracking and not in its way; the first call waits only for
-//    what is not done yet (then with every core). The same proposals, without the stall
-//    when the first loss comes after about a second (the command line's choice).
-// `tracker` must outlive it (held by the tracker itself, it does); the views are those of
-// the model the tracker was given when the proposer was made. No proposals (empty) when
-// the views cannot be made.
-enum class ViewBankBuild { kAtFirstUse, kInBackground };
+// among the first four proposals). `tracker` must outlive it (held by the tracker itself,
+// it does); the views are those of the model the tracker was given when the proposer was
+// made. No proposals (empty) when the views cannot be made.
+//
+// When the proposer's views are rendered:
+enum class ViewBankBuild {
+  // At the first call. A tracker that never loses its object pays nothing; one that does
+  // stalls for that long at its first loss.
+  kAtFirstUse,
+  // At once, beside tracking, on threads of their own (ViewBankOptions::threads) at the
+  // lowest priority, so that tracking keeps its speed. The first call takes them if they
+  // are done; if not, it cancels them and renders them itself, as kAtFirstUse (never a
+  // longer stall than that, whatever else keeps the machine busy). The same proposals,
+  // and no stall once the first loss comes after the render (the command line's choice).
+  kInBackground,
+};
 PoseProposer ViewBankProposer(Tracker* tracker, const KnownModelPoseOptions& options = {},
                               ViewBankBuild build = ViewBankBuild::kAtFirstUse);
+
+// kInBackground's render: the views of `model` rendered at once on threads of their own
+// (ViewBankOptions::threads) at the lowest priority. Destroying it cancels the render and
+// waits for its threads.
+class BackgroundViewBank {
+ public:
+  BackgroundViewBank(std::shared_ptr<const Mesh> model, const ViewBankOptions& options);
+  ~BackgroundViewBank();
+  BackgroundViewBank(const BackgroundViewBank&) = delete;
+  BackgroundViewBank& operator=(const BackgroundViewBank&) = delete;
+
+  // The views if they are rendered, once; otherwise (not done yet: the render is
+  // cancelled; cancelled, failed, taken before) null.
+  std::shared_ptr<ViewBank> TakeIfDone();
+  // Until the render has ended (tests, tools).
+  void Wait() const;
+
+ private:
+  std::atomic<bool> cancel_{false};
+  std::future<std::shared_ptr<ViewBank>> done_;
+};
+
+// The proposer with the views `background` renders, taken at the first call if done
+// (rendered then as with kAtFirstUse if not, or if `background` is null).
+PoseProposer ViewBankProposer(Tracker* tracker, const KnownModelPoseOptions& options,
+                              std::shared_ptr<BackgroundViewBank> background);
 
 }  // namespace unseen

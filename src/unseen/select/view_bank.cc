@@ -166,7 +166,9 @@ std::vector<Eigen::Vector3d> FibonacciSphere(int n) {
   return points;
 }
 
-ViewBank::ViewBank(const Mesh& model, const ViewBankOptions& options) : options_(options) {
+ViewBank::ViewBank(const Mesh& model, const ViewBankOptions& options,
+                   const std::atomic<bool>* cancel)
+    : options_(options) {
   options_.Check();
   model.Check();
   Eigen::Vector3f centre;
@@ -194,6 +196,7 @@ ViewBank::ViewBank(const Mesh& model, const ViewBankOptions& options) : options_
   const std::vector<Eigen::Vector3d> directions = FibonacciSphere(options_.num_directions);
   ThreadPool pool(options_.threads);
   pool.ParallelFor(options_.num_directions, [&](int d) {
+    if (cancel && cancel->load(std::memory_order_relaxed)) return;
     const Eigen::Matrix3d looking = LookingFrom(directions[d]);
     const Rigid3d cam_from_obj = Rigid3d::FromRotationMatrix(
         looking, Eigen::Vector3d(0, 0, render_distance_m_) - looking * sphere_centre_);
@@ -246,6 +249,7 @@ ViewBank::ViewBank(const Mesh& model, const ViewBankOptions& options) : options_
       slot_weights[row] = static_cast<float>(cv::sum(magnitude)[0]);
     }
   });
+  UNSEEN_CHECK(!(cancel && cancel->load()), "view bank: cancelled");
   views_.reserve(max_views);
   for (int row = 0; row < max_views; ++row) {
     if (!slots[row]) continue;

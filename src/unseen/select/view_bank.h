@@ -29,10 +29,12 @@
 // each view's own silhouette). Renders come from render/rasterizer.h without shading.
 #pragma once
 
+#include <atomic>
+#include <vector>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
-#include <vector>
 
 #include "unseen/camera/camera.h"
 #include "unseen/geometry/rigid3.h"
@@ -69,8 +71,10 @@ struct ViewMatch {
 class ViewBank {
  public:
   // Renders `model` (metres, object frame; Mesh::Check()) from every direction. Throws
-  // unseen::Error for invalid options or a model that covers no pixel.
-  explicit ViewBank(const Mesh& model, const ViewBankOptions& options = {});
+  // unseen::Error for invalid options or a model that covers no pixel, and when `cancel`
+  // (if given) turns true before every direction is rendered (the rest are skipped).
+  explicit ViewBank(const Mesh& model, const ViewBankOptions& options = {},
+                    const std::atomic<bool>* cancel = nullptr);
 
   int size() const { return static_cast<int>(views_.size()); }
   const ViewBankOptions& options() const { return options_; }

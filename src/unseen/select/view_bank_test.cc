@@ -167,5 +167,13 @@ TEST(ViewBank, RejectsWrongInput) {
   EXPECT_THROW(bank.CamFromObj(wrong, testing::Camera512(), PixelRect{0, 0, 20, 20}), Error);
 }
 
+TEST(ViewBank, ACancelledRenderGivesNoBank) {
+  const Mesh cube = MakeLetteredCube(0.096, 16);
+  const ViewBankOptions options{.num_directions = 20, .num_rolls = 4};
+  const std::atomic<bool> cancel{true}, go_on{false};
+  EXPECT_THROW(ViewBank(cube, options, &cancel), Error);
+  EXPECT_EQ(ViewBank(cube, options, &go_on).size(), 80);
+}
+
 }  // namespace
 }  // namespace unseen
