@@ -211,11 +211,11 @@ PoseProposer ViewBankProposer(Tracker* tracker, const KnownModelPoseOptions& opt
     if (*failed) return std::vector<Rigid3d>();
     try {
       if (!*poser) {
-        Timer timer;
         const std::shared_ptr<ViewBank> done = background ? background->TakeIfDone() : nullptr;
         if (done) {
           *poser = std::make_shared<const KnownModelPoser>(tracker, std::move(*done), options);
         } else {
+          Timer timer;
           *poser = std::make_shared<const KnownModelPoser>(tracker, options);
           UNSEEN_LOG_INFO("view-bank proposals: {} views rendered in {:.0f} ms",
                           options.views.num_directions * options.views.num_rolls,
