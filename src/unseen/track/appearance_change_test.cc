@@ -1,9 +1,12 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 //
 // The tracker when the model's colours stop matching the images while it tracks: a light
-// that changes (the photometric modality is demoted, the silhouette leads), and colours
-// that never fitted (the model takes its colours from the tracked frames).
+// that changes or a texture that drags the pose off its silhouette (the photometric
+// modality is demoted, the silhouette leads), and colours that never fitted (the model
+// takes its colours from the tracked frames).
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -160,16 +163,75 @@ TEST_F(AppearanceChange, AnOccluderIsNotTakenForColoursThatNeverFitted) {
   EXPECT_TRUE(track(options, false));
 }
 
+TEST_F(AppearanceChange, ATextureThatDragsThePoseOffItsSilhouetteIsDemoted) {
+  // The camera sees the cube's outline where it is, but from frame 9 on its colours as if
+  // it were coming nearer (6 mm a frame, up to 30 mm), in sensor noise: the optical flow
+  // follows the colours and drags the pose off the outline, still confident.
+  const PinholeCamera& camera = rig_.cameras[0].intrinsics;
+  const Rigid3d cam_from_world = rig_.cameras[0].cam_from_world();
+  constexpr int kFrames = 20;
+  constexpr int kDragFrom = 9;
+  cv::RNG rng(7);
+  std::vector<cv::Mat> frames;
+  for (int k = 0; k < kFrames; ++k) {
+    const Rigid3d truth = Truth(k);
+    const Rigid3d painted(
+        truth.rotation(),
+        truth.translation() -
+            Eigen::Vector3d(0.0, 0.0, 0.006 * std::clamp(k - kDragFrom + 1, 0, 5)));
+    RenderBuffers outline, colours;
+    Render(model_, camera, cam_from_world * truth, camera.ImageRect(), RenderOptions(), &outline);
+    Render(model_, camera, cam_from_world * painted, camera.ImageRect(), RenderOptions(), &colours);
+    cv::Mat image = background_.clone();
+    colours.color.copyTo(image, outline.mask);  // the nearer colours cover the outline
+    cv::GaussianBlur(image, image, cv::Size(), 0.7);
+    cv::Mat noise(image.size(), image.type());
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, 0.06);
+    frames.push_back(image + noise);
+  }
+  // Tracks the frames; the largest position error from frame `from` on.
+  auto track = [&](const TrackerOptions& options, int from, bool* demoted) {
+    Tracker tracker(rig_, model_, options);
+    tracker.Initialize(Truth(0));
+    double max_error_m = 0.0;
+    for (int k = 0; k < kFrames; ++k) {
+      const TrackResult r = tracker.Track({frames[k]});
+      EXPECT_EQ(r.status, TrackStatus::kTracking) << "frame " << k << ": " << r.BriefReport();
+      if (k >= from) {
+        max_error_m = std::max(max_error_m, Difference(r.world_from_obj, Truth(k)).translation);
+      }
+    }
+    *demoted = tracker.photometric_demoted();
+    return max_error_m;
+  };
+  // This test is about the check alone: no light-change check; the silhouette's lines are
+  // all kept (the nearer colours end at the outline, where the texture's block tests take
+  // them for an occluder's edge), and alone it leads once the texture is demoted.
+  TrackerOptions options;
+  options.photometric.light_change_fit = 0.0;
+  options.photometric.dragged_weight = 0.0;
+  options.region.skip_occluded_lines = false;
+  bool demoted = false;
+  // The drag is caught within three frames; from then on the silhouette holds the pose.
+  EXPECT_LT(track(options, kDragFrom + 3, &demoted), 0.005);
+  EXPECT_TRUE(demoted);
+  // Unchecked, the colours drag the pose 30 mm nearer.
+  options.photometric.silhouette_drag_ratio = 0.0;
+  EXPECT_GT(track(options, kDragFrom + 3, &demoted), 0.02);
+  EXPECT_FALSE(demoted);
+}
+
 TEST(AppearanceChangeOptions, ParsedAndChecked) {
   const TrackerOptions o = ParseTrackerOptions(
       "photometric: {dragged_weight: 0.2, light_change_fit: 0.4, "
-      "light_change_max_gathering: 0.6, start_by_silhouette: false}\n"
+      "light_change_max_gathering: 0.6, start_by_silhouette: false, silhouette_drag_ratio: 2}\n"
       "live_appearance: {poor_fit_share: 0.3, poor_fit_frames: 4, poor_fit_best_share: 0.5, "
       "poor_fit_confidence: 0.6}\n");
   EXPECT_EQ(o.photometric.dragged_weight, 0.2);
   EXPECT_EQ(o.photometric.light_change_fit, 0.4);
   EXPECT_EQ(o.photometric.light_change_max_gathering, 0.6);
   EXPECT_FALSE(o.photometric.start_by_silhouette);
+  EXPECT_EQ(o.photometric.silhouette_drag_ratio, 2.0);
   EXPECT_TRUE(TrackerOptions().photometric.start_by_silhouette);
   EXPECT_EQ(o.live_appearance.poor_fit_share, 0.3);
   EXPECT_EQ(o.live_appearance.poor_fit_frames, 4);
@@ -178,6 +240,7 @@ TEST(AppearanceChangeOptions, ParsedAndChecked) {
   EXPECT_THROW(ParseTrackerOptions("photometric: {dragged_weight: 1.5}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("photometric: {light_change_fit: -0.1}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("photometric: {light_change_max_gathering: .nan}\n"), Error);
+  EXPECT_THROW(ParseTrackerOptions("photometric: {silhouette_drag_ratio: -1}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("live_appearance: {poor_fit_frames: -1}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("live_appearance: {poor_fit_best_share: 2}\n"), Error);
 }

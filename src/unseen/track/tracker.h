@@ -280,6 +280,9 @@ class Tracker {
   // Whether a tracked frame's alignment shows the light changed under the model's own
   // colours (PhotometricOptions::light_change_fit); `has_depth`: the frame carries depth.
   bool LightChanged(const SolveSummary& summary, bool has_depth) const;
+  // Whether a tracked frame's texture pulled its pose off the silhouette's contour
+  // (PhotometricOptions::silhouette_drag_ratio).
+  bool TextureDragsSilhouette(const SolveSummary& summary, bool has_depth) const;
   // A lost object's re-acquired pose whose texture agrees far less than it did while
   // tracked (FailureOptions::recover_share_ratio), while the texture judges.
   bool TextureDisowns(const SolveSummary& summary) const;

@@ -149,6 +149,23 @@ bool Tracker::LightChanged(const SolveSummary& s, bool has_depth) const {
          s.counts.RejectionGathering() < po.light_change_max_gathering;
 }
 
+bool Tracker::TextureDragsSilhouette(const SolveSummary& s, bool has_depth) const {
+  const PhotometricOptions& po = options_.photometric;
+  // Measured depth anchors the pose; without occlusion rejection a silhouette off its
+  // contour is as likely an occluder's doing (the texture's pixels on it are not rejected).
+  if (po.silhouette_drag_ratio <= 0.0 || has_depth || !PhotometricJudges() ||
+      !options_.region.enabled || !options_.selection.use_occlusion_rejection ||
+      model_ != given_model_ || region_residual_reference_ <= 0.0 ||
+      s.region_counts.used < options_.failure.min_region_lines) {
+    return false;
+  }
+  // A texture that vouches for the pose on most of its pixels is not dragged; pixels
+  // rejected in blocks rather than over the object are an occluder's (as LightChanged).
+  return RegionResidualRatio(s) > po.silhouette_drag_ratio &&
+         s.share < po.silhouette_drag_max_share &&
+         s.counts.RejectionGathering() < po.light_change_max_gathering;
+}
+
 TrackResult Tracker::AlignFirstFrame(const Frame& frame, const Rigid3d& given) {
   const Learnt given_learnt = SaveLearnt();
   const bool joint = use_photometric_ && options_.region.enabled;

@@ -199,6 +199,11 @@ void PhotometricOptions::Check() const {
   UNSEEN_CHECK(light_change_max_gathering >= 0.0 && light_change_max_gathering <= 1.0,
                "photometric.light_change_max_gathering {} must be in [0, 1]",
                light_change_max_gathering);
+  UNSEEN_CHECK(silhouette_drag_ratio >= 0.0 && std::isfinite(silhouette_drag_ratio),
+               "photometric.silhouette_drag_ratio {} must be >= 0", silhouette_drag_ratio);
+  UNSEEN_CHECK(silhouette_drag_max_share >= 0.0 && silhouette_drag_max_share <= 1.0,
+               "photometric.silhouette_drag_max_share {} must be in [0, 1]",
+               silhouette_drag_max_share);
 }
 
 namespace {
@@ -229,6 +234,8 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"projected_with_depth_ratio", YamlField(&ph.projected_with_depth_ratio)},
         {"light_change_fit", YamlField(&ph.light_change_fit)},
         {"light_change_max_gathering", YamlField(&ph.light_change_max_gathering)},
+        {"silhouette_drag_ratio", YamlField(&ph.silhouette_drag_ratio)},
+        {"silhouette_drag_max_share", YamlField(&ph.silhouette_drag_max_share)},
         {"weight", YamlField(&ph.weight)}}},
       {"preprocess",
        {{"use_linf", YamlField(&pp.use_linf)},

@@ -105,6 +105,34 @@ TrackResult Tracker::Track(const Frame& input_frame) {
     photometric_demoted_ = true;
     align_again();
   }
+  if (!search && !learn_from_start_ && status_ == TrackStatus::kTracking &&
+      r.confidence >= f.lost_confidence &&
+      TextureDragsSilhouette(r.summary, !frame.depths.empty())) {
+    // The texture pulled the pose off the silhouette's contour (a dim, noisy object whose
+    // blurred outline the composed virtual image misreads): the frame aligned again with
+    // the silhouette leading is kept, and the silhouette leads from now on, when it is
+    // judged as confident and sits that much closer to its contour.
+    const Learnt joint_learnt = SaveLearnt();
+    const TrackResult joint = r;
+    photometric_demoted_ = true;
+    align_again();
+    const double joint_ratio = RegionResidualRatio(joint.summary);
+    const double led_ratio = RegionResidualRatio(r.summary);
+    if (r.confidence >= std::max(joint.confidence, options_.failure.recover_confidence) &&
+        led_ratio * options_.photometric.silhouette_drag_ratio <= joint_ratio) {
+      UNSEEN_LOG_INFO(
+          "tracker: frame {}: the texture drags the pose off the silhouette "
+          "(contour residual {:.2f} -> {:.2f} of the confident frames'); the "
+          "silhouette leads",
+          frame.frame_id, joint_ratio, led_ratio);
+    } else {
+      photometric_demoted_ = false;
+      RestoreLearnt(joint_learnt);
+      const StageTimes both_times = r.summary.times;
+      r = joint;
+      r.summary.times = both_times;
+    }
+  }
   if (!search && HeldAppearanceFaded(r)) {
     // The held texture no longer fits (the view or the light moved on): the last tracked
     // frame's colours align this one.
