@@ -204,6 +204,8 @@ void PhotometricOptions::Check() const {
   UNSEEN_CHECK(silhouette_drag_max_share >= 0.0 && silhouette_drag_max_share <= 1.0,
                "photometric.silhouette_drag_max_share {} must be in [0, 1]",
                silhouette_drag_max_share);
+  UNSEEN_CHECK(silhouette_drag_led_ratio >= 0.0 && std::isfinite(silhouette_drag_led_ratio),
+               "photometric.silhouette_drag_led_ratio {} must be >= 0", silhouette_drag_led_ratio);
 }
 
 namespace {
@@ -236,6 +238,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"light_change_max_gathering", YamlField(&ph.light_change_max_gathering)},
         {"silhouette_drag_ratio", YamlField(&ph.silhouette_drag_ratio)},
         {"silhouette_drag_max_share", YamlField(&ph.silhouette_drag_max_share)},
+        {"silhouette_drag_led_ratio", YamlField(&ph.silhouette_drag_led_ratio)},
         {"weight", YamlField(&ph.weight)}}},
       {"preprocess",
        {{"use_linf", YamlField(&pp.use_linf)},

@@ -400,6 +400,11 @@ struct PhotometricOptions {
   // rejected pixels gather in blocks (RejectionGathering at least light_change_max_gathering:
   // an occluder hiding part of the contour, 0.59-0.66 where the check misfired).
   double silhouette_drag_max_share = 0.8;
+  // ... and the realignment led by the silhouette is kept only where its contour residual
+  // is at most this many times its confident frames' (the dim jeep 0.85; the box under a
+  // circling lamp, whose silhouette the lamp had misled, 1.20-1.92: demoted there, it was
+  // tracked 40-180 mm off behind the spider).
+  double silhouette_drag_led_ratio = 1.0;
   double weight = 1.0;
   // A model whose colours are projected from camera images onto its own approximate
   // surface (Mesh::projectors: an on-line model's key views, or such a model saved and

@@ -111,14 +111,17 @@ TrackResult Tracker::Track(const Frame& input_frame) {
     // The texture pulled the pose off the silhouette's contour (a dim, noisy object whose
     // blurred outline the composed virtual image misreads): the frame aligned again with
     // the silhouette leading is kept, and the silhouette leads from now on, when it is
-    // judged as confident and sits that much closer to its contour.
+    // judged as confident and sits that much closer to its contour, as close as its
+    // confident frames do (a silhouette misled itself, by a moving lamp, does not take the
+    // lead).
     const Learnt joint_learnt = SaveLearnt();
     const TrackResult joint = r;
     photometric_demoted_ = true;
     align_again();
     const double joint_ratio = RegionResidualRatio(joint.summary);
     const double led_ratio = RegionResidualRatio(r.summary);
-    if (r.confidence >= std::max(joint.confidence, options_.failure.recover_confidence) &&
+    if (r.confidence >= std::max(joint.confidence, f.recover_confidence) &&
+        led_ratio <= options_.photometric.silhouette_drag_led_ratio &&
         led_ratio * options_.photometric.silhouette_drag_ratio <= joint_ratio) {
       UNSEEN_LOG_INFO(
           "tracker: frame {}: the texture drags the pose off the silhouette "
