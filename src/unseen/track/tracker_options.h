@@ -390,10 +390,10 @@ struct PhotometricOptions {
   // least the first's and its contour residual smaller by this ratio again. (A dim textured
   // object in sensor noise: the composed virtual image misreads its blurred outline and the
   // optical flow pulled the pose deeper, 40-230 mm off in six frames before it was lost.)
-  // Measured (--init gt, 65 runs of the dev, start, occlusion and held-out groups): dim noisy
-  // jeep 21.7 -> 100 % (48.7 -> 4.0 mm), its perturbed start 10 -> 98 %, the dim fast duck's
-  // 2 -> 76 %, box behind the bar without occlusion rejection 93.6 -> 99.6 %; the others
-  // unchanged. 0: never.
+  // Measured (tracker benchmark, 117 runs of the dev, start, occlusion and held-out groups
+  // with 19 held-out renders): dim noisy jeep 21.7 -> 100 % (48.7 -> 4.0 mm), its perturbed
+  // start 10 -> 98 %, the box behind the bar demoted at its frame 61 (0.57 -> 0.49 mm); the
+  // others unchanged (sum 108.31 -> 109.97). 0: never.
   double silhouette_drag_ratio = 1.5;
   // ... but not while the texture vouches for the pose on more than this share of its
   // pixels (PixelSelection's survival share; the dim jeep's was 0.42), nor while its
