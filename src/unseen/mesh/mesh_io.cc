@@ -206,10 +206,12 @@ void WeldIdenticalVertices(Mesh* mesh) {
   std::vector<int> remap(mesh->num_vertices());
   Mesh out;
   for (int v = 0; v < mesh->num_vertices(); ++v) {
-    std::string key(reinterpret_cast<const char*>(mesh->vertices[v].data()), 3 * sizeof(float));
+    std::string key;
+    key.reserve(11 * sizeof(float));  // position, normal, uv, colour
     auto append = [&](const float* data, int n) {
       key.append(reinterpret_cast<const char*>(data), n * sizeof(float));
     };
+    append(mesh->vertices[v].data(), 3);
     if (!mesh->normals.empty()) append(mesh->normals[v].data(), 3);
     if (!mesh->uvs.empty()) append(mesh->uvs[v].data(), 2);
     if (!mesh->colors_bgr.empty()) append(mesh->colors_bgr[v].data(), 3);
