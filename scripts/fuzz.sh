@@ -1,8 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzes every reader of outside input for a bounded effort (README "Fuzzing"): installs what
 # is missing, builds the libFuzzer targets of fuzz/ with clang, AddressSanitizer and UBSan in
-# their own build folder (without precompiled headers, so that a unit that does not include
-# what it uses fails here), then runs each on a copy of its seed corpus and its regression
+# their own build folder, then runs each on a copy of its seed corpus and its regression
 # inputs. Prints one line per target; exits non-zero when any target finds a crash, a hang,
 # a leak or a sanitizer report (the input is kept in <build>/fuzz-runs/<target>/).
 #
@@ -33,8 +32,7 @@ start=$SECONDS
 
 bash "$root/scripts/install_deps.sh" --fuzz
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ \
-  -DUNSEEN_SANITIZE=ON -DUNSEEN_BUILD_FUZZERS=ON -DUNSEEN_BUILD_TESTS=OFF \
-  -DUNSEEN_PRECOMPILE_HEADERS=OFF > /dev/null
+  -DUNSEEN_SANITIZE=ON -DUNSEEN_BUILD_FUZZERS=ON -DUNSEEN_BUILD_TESTS=OFF > /dev/null
 cmake --build "$build" -j "$jobs" --target unseen_fuzzers
 echo "== Built the fuzz targets in $((SECONDS - start)) s"
 
