@@ -120,6 +120,7 @@ RegionCounts& RegionCounts::operator+=(const RegionCounts& o) {
   agreeing += o.agreeing;
   edge_lines += o.edge_lines;
   occluded += o.occluded;
+  overrun += o.overrun;
   return *this;
 }
 
@@ -293,9 +294,19 @@ void AddRegionEquations(const RegionModalityInput& in, const RegionModalityOptio
     log_bg[last + 1] = 0.0f;
     for (int k = last; k >= first; --k) log_bg[k] = log_bg[k + 1] + histograms->LogBackground(bins[k]);
     double best = -1e30;
+    int most_likely = first;
     for (int d = first; d <= last + 1; ++d) {
       log_p[d] = double(log_fg[d]) + double(log_bg[d]);
-      best = std::max(best, log_p[d]);
+      if (log_p[d] > best) {
+        best = log_p[d];
+        most_likely = d;
+      }
+    }
+    // The most likely contour past the last sample of a line that ran its whole outer half:
+    // the object's colours go on beyond it.
+    if (most_likely == last + 1 && last == samples - 1) {
+      ++c.overrun;
+      if (in.skip_overrun) continue;
     }
     double sum = 0.0, mean = 0.0;
     for (int d = first; d <= last + 1; ++d) {
@@ -353,6 +364,7 @@ void RegionModality::AddEquations(const ModalityRound& round) {
   in.level = round.level;
   in.occluded_blocks = round.occluded_blocks;
   in.occluded_block_px = round.occluded_block_px;
+  in.skip_overrun = options_.skip_overrun_lines && round.without_texture;
   ColorHistograms& h = histograms_[round.camera];
   FlowEquations& out = CameraEquations(round);
   RegionCounts& counts = CameraCounts(round);

@@ -148,5 +148,41 @@ TEST(RegionModality, LinesWhoseColoursLeaveTheImagesEdgeGiveNoRow) {
   EXPECT_THROW(ParseTrackerOptions("region: {edge_contradiction_px: -1}\n"), Error);
 }
 
+// A square object before a background of another colour; then a look-alike of the object's
+// very colour (its twin behind it) touching its right edge and reaching past the lines'
+// outer ends. Those lines find no contour on them: their colours run on past their end, and
+// would pull the contour their whole length onto the twin. Marked to skip them (as the
+// tracker does while the silhouette tracks without texture) they give no row, and the rest
+// sit on the contour.
+TEST(RegionModality, LinesWhoseColoursRunPastTheirEndCanBeLeftOut) {
+  const cv::Vec3f object(0.1f, 0.1f, 0.9f);
+  SquareScene scene(cv::Vec3f(0.6f, 0.6f, 0.6f), object);
+  RegionModalityOptions options;
+  ColorHistograms histograms(options.bins_per_channel);
+  scene.Learn(options, &histograms);
+  ASSERT_TRUE(histograms.learnt());
+  RegionCounts alone;
+  EXPECT_LT(LargestRowOffset(scene.Input(), options, &histograms, &alone), 1.5f);
+  EXPECT_EQ(alone.overrun, 0);
+  // The twin: 20 px wide, more than a line's outer half (line_px = 12), the image's height.
+  ASSERT_LT(options.line_px, 20);
+  scene.image(cv::Rect(scene.square.x + scene.square.width, 0, 20, SquareScene::kSize))
+      .setTo(object);
+  RegionModalityInput in = scene.Input();
+
+  auto largest_offset = [&](bool skip, RegionCounts* counts) {
+    in.skip_overrun = skip;
+    return LargestRowOffset(in, options, &histograms, counts);
+  };
+  RegionCounts kept, skipped;
+  EXPECT_GT(largest_offset(false, &kept), 5.0f);
+  EXPECT_LT(largest_offset(true, &skipped), 1.5f);
+  EXPECT_GT(kept.overrun, 0);
+  EXPECT_EQ(skipped.overrun, kept.overrun);
+  EXPECT_EQ(skipped.used, kept.used - kept.overrun);
+  EXPECT_EQ(skipped.lines, kept.lines);
+  EXPECT_THROW(ParseTrackerOptions("region: {skip_overrun_lines: maybe}\n"), Error);
+}
+
 }  // namespace
 }  // namespace unseen

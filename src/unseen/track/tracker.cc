@@ -70,9 +70,9 @@ std::string SolveSummary::BriefReport() const {
                         1e3 * depth_residual_m)
           : std::string(),
       region_counts.lines
-          ? fmt::format(" | region lines {} used {} occluded {} agree {:.2f} res {:.2f}",
+          ? fmt::format(" | region lines {} used {} occluded {} overrun {} agree {:.2f} res {:.2f}",
                         region_counts.lines, region_counts.used, region_counts.occluded,
-                        region_counts.Agreement(), region_residual)
+                        region_counts.overrun, region_counts.Agreement(), region_residual)
           : std::string(),
       times.predict_ms, times.render_ms, times.preprocess_ms, times.select_ms, times.solve_ms,
       times.total_ms);
@@ -602,6 +602,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
         if (use_depth && !frame.depths[c].empty()) round.measured_depth = &frame.depths[c];
         round.learn = level == full_resolution && !span.scoring;
         round.first_frame = learn_from_start_;
+        round.without_texture = !use_photometric_;
         switch (jobs[j] % kModalityJobs) {
           case kPhotometricJob:
             photometric_.AddEquations(round);

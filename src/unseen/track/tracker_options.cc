@@ -395,6 +395,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"skip_occluded_lines", YamlField(&rg.skip_occluded_lines)},
         {"occluded_probe_px", YamlField(&rg.occluded_probe_px)},
         {"edge_contradiction_px", YamlField(&rg.edge_contradiction_px)},
+        {"skip_overrun_lines", YamlField(&rg.skip_overrun_lines)},
         {"kernel", YamlEnumField(&rg.residual.kernel, &ParseRobustKernel)},
         {"kernel_width", YamlField(&rg.residual.kernel_width)},
         {"min_scale", YamlField(&rg.residual.min_scale)},
