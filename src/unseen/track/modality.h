@@ -55,7 +55,8 @@ struct ModalityRound {
   // finest level); `first_frame`: the frame after Initialize(), at the given pose.
   bool learn = false;
   bool first_frame = false;
-  // No photometric modality in this alignment: the silhouette (and depth) track alone.
+  // A frame's alignment from its predicted pose (not a search's) without the photometric
+  // modality: the silhouette (and depth) track alone.
   bool without_texture = false;
 };
 

@@ -54,16 +54,20 @@ struct RegionModalityOptions {
   // has the object's edge where the pose puts it, and what lies beyond looks like the
   // object (a look-alike behind it), so the colours would pull the contour onto it.
   double edge_contradiction_px = 0.0;
-  // While the silhouette tracks without texture (no photometric modality in the alignment:
-  // RegionModalityInput::skip_overrun), a line whose colours place the contour at its outer
-  // end gives no row. Its colours run on past it: a look-alike behind the object (its twin,
-  // a surface of its colours) continues it, and the line, which cannot say how far, would
-  // pull the contour its whole length onto it. Measured on the duck whose identical twin
-  // passes behind it: dragged 4-8 mm aside and lost for 9 frames (77.8 %), now 100 % at
-  // 0.78 mm; every other development, held-out and perturbed-start run unchanged. Not where
-  // texture leads: there such lines also hold a pose against an occluder of the object's
-  // colours, and leaving them out lost the box behind the spider, the cube behind the cube
-  // with occlusion rejection off (86 -> 43 %) and a start of the dim jeep (100 -> 15 %).
+  // While the silhouette tracks a frame without texture (no photometric modality in the
+  // alignment from the predicted pose: RegionModalityInput::skip_overrun), a line whose
+  // colours place the contour at its outer end gives no row. Its colours run on past it: a
+  // look-alike behind the object (its twin, a surface of its colours) continues it, and the
+  // line, which cannot say how far, would pull the contour its whole length onto it.
+  // Measured on the duck whose identical twin passes behind it: dragged 4-8 mm aside and
+  // lost for 9 frames (77.8 %), now 100 % at 0.78 mm; every other development, held-out and
+  // perturbed-start run unchanged. Not in a search's alignments, which start far off: there
+  // such lines are what pulls a candidate onto the object (left out there too, the
+  // untextured figure was not found again after a blackout in a build for AVX-512, 77 ->
+  // 27 %). Not where texture leads: there they also hold a pose against an occluder of the
+  // object's colours, and leaving them out lost the box behind the spider, the cube behind
+  // the cube with occlusion rejection off (86 -> 81 %) and a start of the dim jeep (100 ->
+  // 15 %).
   bool skip_overrun_lines = true;
   // Robust kernel, scales and weight against the other modalities (residuals: contour
   // offsets over their standard deviation). Half weight: beside a texture that fits, the
@@ -159,7 +163,8 @@ struct RegionModalityInput {
   const cv::Mat* occluded_blocks = nullptr;
   int occluded_block_px = 0;
   // Lines whose colours run on past their outer end give no row (the caller's choice:
-  // RegionModalityOptions::skip_overrun_lines while the silhouette tracks without texture).
+  // RegionModalityOptions::skip_overrun_lines while the silhouette tracks a frame without
+  // texture).
   bool skip_overrun = false;
 };
 

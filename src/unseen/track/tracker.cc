@@ -602,7 +602,7 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
         if (use_depth && !frame.depths[c].empty()) round.measured_depth = &frame.depths[c];
         round.learn = level == full_resolution && !span.scoring;
         round.first_frame = learn_from_start_;
-        round.without_texture = !use_photometric_;
+        round.without_texture = !use_photometric_ && span.tracking;
         switch (jobs[j] % kModalityJobs) {
           case kPhotometricJob:
             photometric_.AddEquations(round);
