@@ -28,6 +28,7 @@ if [ "$mode" != budget ] && [ "$mode" != time ]; then
   exit 2
 fi
 jobs="${UNSEEN_JOBS:-$(nproc)}"
+timeout=5  # seconds one input may take before libFuzzer reports a hang
 start=$SECONDS
 
 bash "$root/scripts/install_deps.sh" --fuzz
@@ -73,11 +74,31 @@ run_target() {
     fi
     limits=(-runs="$runs" -max_total_time="$((3 * seconds))")
   fi
+  local fuzzer="$build/fuzz/${name}_fuzzer"
   local status=0
-  "$build/fuzz/${name}_fuzzer" "${inputs[@]}" "${limits[@]}" -timeout=5 \
-    -rss_limit_mb=2048 -dict="$root/fuzz/numbers.dict" -artifact_prefix="$work/" \
-    -seed="$seed" -print_final_stats=1 "${@:2}" \
-    > "$work/log" 2>&1 || status=$?
+  "$fuzzer" "${inputs[@]}" "${limits[@]}" -timeout="$timeout" -rss_limit_mb=2048 \
+    -dict="$root/fuzz/numbers.dict" -artifact_prefix="$work/" -seed="$seed" \
+    -print_final_stats=1 "${@:2}" > "$work/log" 2>&1 || status=$?
+  # A timeout is a hang only when it recurs: one input over the limit while the machine was
+  # busy (another target fuzzing beside it, a stalled disk) is replayed alone with the same
+  # limit; when it then finishes, the run is noted in <work>/retry and the target is fuzzed
+  # once more from its grown corpus, whose result counts. An input that times out again, or
+  # any other failure, fails as before.
+  local artifact
+  artifact="$(find "$work" -maxdepth 1 -type f -name 'timeout-*' | head -n 1)"
+  if [ "$status" -ne 0 ] && [ -n "$artifact" ]; then
+    local replay_start=$EPOCHREALTIME
+    if "$fuzzer" -timeout="$timeout" -rss_limit_mb=2048 "$artifact" > "$work/replay.log" 2>&1; then
+      mkdir -p "$work/first"
+      mv "$work/log" "$artifact" "$work/first/"
+      awk -v a="$(basename "$artifact")" -v t0="$replay_start" -v t1="$EPOCHREALTIME" \
+        'BEGIN { printf "input %s timed out, ran in %.2f s alone\n", a, t1 - t0 }' > "$work/retry"
+      status=0
+      "$fuzzer" "$work/corpus" "${limits[@]}" -timeout="$timeout" -rss_limit_mb=2048 \
+        -dict="$root/fuzz/numbers.dict" -artifact_prefix="$work/" -seed="$seed" \
+        -print_final_stats=1 "${@:2}" > "$work/log" 2>&1 || status=$?
+    fi
+  fi
   echo "$status" > "$work/status"
 }
 
@@ -125,6 +146,8 @@ for name in "${targets[@]}"; do
     grep -m 1 -e '==unseen fuzz==' -e 'runtime error:' -e 'ERROR: [A-Za-z]*Sanitizer' \
       -e 'ERROR: libFuzzer' "$work/log" | sed 's/^/\n    /' | tr -d '\n' || true
   fi
+  if [ -e "$work/retry" ]; then printf '  (fuzzed twice: %s, kept in %s)' "$(cat "$work/retry")" \
+    "$work/first"; fi
   printf '\n'
 done
 echo "== ${#targets[@]} targets, $failed failed, $((SECONDS - start)) s in all"
