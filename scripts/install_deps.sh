@@ -6,7 +6,7 @@ set -euo pipefail
 
 PACKAGES=(
   build-essential cmake pkg-config git
-  libopencv-dev libeigen3-dev nlohmann-json3-dev libyaml-cpp-dev libcli11-dev
+  libopencv-dev libeigen3-dev nlohmann-json3-dev libyaml-cpp-dev libpugixml-dev libcli11-dev
   libspdlog-dev libfmt-dev libassimp-dev libmeshoptimizer-dev
   libgtest-dev libgmock-dev libbenchmark-dev libomp-dev
 )

@@ -11,11 +11,13 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/core.hpp>
+#include <pugixml.hpp>
 #include <sstream>
+#include <string_view>
+#include <vector>
 
 #include "unseen/util/error.h"
 #include "unseen/util/files.h"
-#include "unseen/util/yaml_options.h"
 
 namespace unseen {
 
@@ -69,75 +71,19 @@ PinholeCamera MakeCamera(const std::vector<double>& k, int width, int height,
   return camera;
 }
 
-// --- OpenCV (cv::FileStorage) -----------------------------------------------------------
+// --- Text formats into one tree ------------------------------------------------------
+//
+// cv::FileStorage does not read outside files here: fuzzing found its YAML parser looping
+// forever once a first document ends early and what follows starts with '-', its XML parser
+// reading through a null pointer on a malformed declaration, and both exhausting the stack
+// on deep nesting. YAML and JSON (which YAML reads) go through yaml-cpp, XML through
+// pugixml, into one YAML::Node tree that ReadFields checks field by field.
 
-int ReadInt(const cv::FileStorage& fs, const char* key, const std::string& path) {
-  const cv::FileNode node = fs[key];
-  UNSEEN_CHECK(!node.empty() && !node.isNone(), "{}: field \"{}\" is missing", path, key);
-  UNSEEN_CHECK(node.isInt(), "{}: field \"{}\" must be an integer", path, key);
-  return static_cast<int>(node);
-}
+constexpr int kMaxNesting = 64;  // a calibration file nests a few levels
 
-// cv::read allocates the matrix that "rows" and "cols" (or an n-d matrix's "sizes") declare
-// before it reads "data", so a declared shape larger than any calibration matrix is rejected
-// first.
-void CheckMatrixShape(const cv::FileNode& node, const char* key, const std::string& path) {
-  constexpr int kMaxSide = 64;
-  UNSEEN_CHECK(node.isMap(), "{}: field \"{}\" is not a matrix (rows, cols, dt, data)", path, key);
-  std::vector<cv::FileNode> sides = {node["rows"], node["cols"]};
-  const cv::FileNode sizes = node["sizes"];
-  if (!sizes.empty() && !sizes.isNone()) {
-    UNSEEN_CHECK(sizes.isSeq() && sizes.size() <= 2,
-                 "{}: field \"{}\" has \"sizes\" of a matrix of more than 2 dimensions", path, key);
-    for (size_t i = 0; i < sizes.size(); ++i) sides.push_back(sizes[static_cast<int>(i)]);
-  }
-  for (const cv::FileNode& side : sides) {
-    if (side.empty() || side.isNone()) continue;
-    UNSEEN_CHECK(side.isInt(), "{}: field \"{}\" has a size \"{}\" that is not an integer", path,
-                 key, side.isString() ? side.string() : std::string("(not a number)"));
-    const int n = static_cast<int>(side);
-    UNSEEN_CHECK(n >= 0 && n <= kMaxSide,
-                 "{}: field \"{}\" declares a size of {}, expected at most {}", path, key, n,
-                 kMaxSide);
-  }
-}
-
-std::vector<double> ReadMatrix(const cv::FileStorage& fs, const char* key, const std::string& path,
-                               bool required, int rows, int cols) {
-  const cv::FileNode node = fs[key];
-  if (node.empty() || node.isNone()) {
-    UNSEEN_CHECK(!required, "{}: field \"{}\" is missing", path, key);
-    return {};
-  }
-  CheckMatrixShape(node, key, path);
-  cv::Mat m;
-  node >> m;
-  UNSEEN_CHECK(!m.empty() && m.channels() == 1, "{}: field \"{}\" is not a matrix", path, key);
-  if (rows > 0) {
-    UNSEEN_CHECK(m.rows == rows && m.cols == cols, "{}: field \"{}\" is {}x{}, expected {}x{}",
-                 path, key, m.rows, m.cols, rows, cols);
-  } else {
-    UNSEEN_CHECK(m.rows == 1 || m.cols == 1, "{}: field \"{}\" is {}x{}, expected a vector", path,
-                 key, m.rows, m.cols);
-  }
-  cv::Mat d;
-  m.convertTo(d, CV_64F);
-  d = d.reshape(1, 1);
-  return std::vector<double>(d.begin<double>(), d.end<double>());
-}
-
-PinholeCamera ReadOpenCv(cv::FileStorage& fs, const std::string& path) {
-  const std::vector<double> k = ReadMatrix(fs, "camera_matrix", path, true, 3, 3);
-  const std::vector<double> dist = ReadMatrix(fs, "distortion_coefficients", path, false, -1, -1);
-  const int width = ReadInt(fs, "image_width", path);
-  const int height = ReadInt(fs, "image_height", path);
-  return MakeCamera(k, width, height, dist, path);
-}
-
-// cv::FileStorage parses recursively, so that deeply nested input exhausts the stack; a
-// calibration file nests a few levels. Counts [ ], { } and XML elements.
+// yaml-cpp (and any parser that recurses per level) would exhaust the stack on deeply
+// nested input. Counts [ ], { } and XML elements.
 void CheckNesting(const std::string& path, const std::string& text) {
-  constexpr int kMaxDepth = 64;
   int depth = 0;
   for (size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
@@ -147,40 +93,97 @@ void CheckNesting(const std::string& path, const std::string& text) {
     } else if (c == ']' || c == '}' || (c == '<' && next == '/') || (c == '/' && next == '>')) {
       --depth;
     }
-    UNSEEN_CHECK(depth <= kMaxDepth, "{}: nested deeper than {} levels (at byte {})", path,
-                 kMaxDepth, i);
+    UNSEEN_CHECK(depth <= kMaxNesting, "{}: nested deeper than {} levels (at byte {})", path,
+                 kMaxNesting, i);
   }
 }
 
-PinholeCamera LoadOpenCvText(const std::string& path, const std::string& text) {
-  // A text format never holds a NUL byte; OpenCV 4.6's XML parser reads through a null
-  // pointer on some that do.
+// A text format never holds a NUL byte.
+void CheckText(const std::string& path, const std::string& text) {
   const size_t nul = text.find('\0');
   UNSEEN_CHECK(nul == std::string::npos, "{}: binary data (a NUL byte at byte {}) in a text file",
                path, nul);
   CheckNesting(path, text);
+}
+
+// OpenCV's YAML starts with a `%YAML:1.0` directive, which is not YAML 1.2 syntax; its
+// directive lines become comments (keeping the line numbers of parse errors).
+std::string WithoutYamlDirectives(const std::string& text) {
+  std::string out;
+  out.reserve(text.size() + 16);
+  size_t begin = 0;
+  while (begin < text.size()) {
+    size_t end = text.find('\n', begin);
+    end = end == std::string::npos ? text.size() : end + 1;
+    if (text.compare(begin, 5, "%YAML") == 0) out += '#';
+    out.append(text, begin, end - begin);
+    begin = end;
+  }
+  return out;
+}
+
+YAML::Node ParseYaml(const std::string& path, const std::string& text, const char* kind) {
   try {
-    std::string content = text;
-    const std::string trimmed = LeftTrimmed(text);
-    const bool yaml_without_header =
-        trimmed.rfind("%YAML", 0) != 0 && trimmed.rfind("<", 0) != 0 && trimmed.rfind("{", 0) != 0;
-    // cv::FileStorage needs the %YAML:1.0 header that OpenCV writes; hand-written files
-    // often lack it.
-    if (yaml_without_header) content = "%YAML:1.0\n" + trimmed;
-    cv::FileStorage fs(content, cv::FileStorage::READ | cv::FileStorage::MEMORY);
-    UNSEEN_CHECK(fs.isOpened(), "{}: not an OpenCV YAML/XML/JSON file", path);
-    return ReadOpenCv(fs, path);
-  } catch (const Error&) {
-    throw;
-  } catch (const cv::Exception& e) {
-    ThrowError("{}: malformed OpenCV calibration file: {}", path, e.what());
-  } catch (const std::exception& e) {
-    // OpenCV 4.6's YAML parser also throws std::length_error on some malformed keys.
-    ThrowError("{}: malformed OpenCV calibration file: {}", path, e.what());
+    return YAML::Load(WithoutYamlDirectives(text));
+  } catch (const YAML::Exception& e) {
+    ThrowError("{}: malformed {}: {}", path, kind, e.what());
   }
 }
 
-// --- ROS camera_info (yaml-cpp) ------------------------------------------------------
+// An XML element as OpenCV writes it: child elements make a map by name (<_> items a
+// sequence), text alone a scalar, or a sequence when it holds several whitespace-separated
+// values (a matrix's <data>).
+YAML::Node XmlToYaml(const pugi::xml_node& element, int depth, const std::string& path) {
+  UNSEEN_CHECK(depth <= kMaxNesting, "{}: XML nested deeper than {} levels", path, kMaxNesting);
+  bool has_elements = false, has_items = false;
+  for (const pugi::xml_node& child : element.children()) {
+    if (child.type() != pugi::node_element) continue;
+    has_elements = true;
+    has_items = has_items || std::string_view(child.name()) == "_";
+  }
+  if (has_elements) {
+    YAML::Node node(has_items ? YAML::NodeType::Sequence : YAML::NodeType::Map);
+    for (const pugi::xml_node& child : element.children()) {
+      if (child.type() != pugi::node_element) continue;
+      if (has_items) {
+        if (std::string_view(child.name()) == "_")
+          node.push_back(XmlToYaml(child, depth + 1, path));
+      } else {
+        node[child.name()] = XmlToYaml(child, depth + 1, path);
+      }
+    }
+    return node;
+  }
+  std::vector<std::string> values;
+  std::istringstream words(element.text().get());
+  for (std::string word; words >> word;) values.push_back(word);
+  if (values.empty()) return YAML::Node();
+  if (values.size() == 1) return YAML::Node(values.front());
+  YAML::Node sequence(YAML::NodeType::Sequence);
+  for (const std::string& v : values) sequence.push_back(v);
+  return sequence;
+}
+
+YAML::Node ParseOpenCvXml(const std::string& path, const std::string& text) {
+  pugi::xml_document document;
+  const pugi::xml_parse_result parsed =
+      document.load_buffer(text.data(), text.size(), pugi::parse_default, pugi::encoding_utf8);
+  UNSEEN_CHECK(parsed, "{}: malformed OpenCV calibration file (XML): {} at byte {}", path,
+               parsed.description(), parsed.offset);
+  const pugi::xml_node root = document.document_element();
+  UNSEEN_CHECK(std::string_view(root.name()) == "opencv_storage",
+               "{}: the XML root element is <{}>, expected <opencv_storage>", path, root.name());
+  return XmlToYaml(root, 0, path);
+}
+
+// An OpenCV file (YAML, JSON or XML, told apart by its first character) as a tree.
+YAML::Node ParseOpenCv(const std::string& path, const std::string& text) {
+  CheckText(path, text);
+  if (LeftTrimmed(text).rfind('<', 0) == 0) return ParseOpenCvXml(path, text);
+  return ParseYaml(path, text, "OpenCV calibration file (YAML/JSON)");
+}
+
+// --- Fields -----------------------------------------------------------------------------
 
 YAML::Node Field(const YAML::Node& root, std::initializer_list<const char*> keys,
                  const std::string& path, bool required) {
@@ -188,7 +191,7 @@ YAML::Node Field(const YAML::Node& root, std::initializer_list<const char*> keys
     if (root[key]) return root[key];
   }
   UNSEEN_CHECK(!required, "{}: field \"{}\" is missing", path, *keys.begin());
-  return YAML::Node();
+  return YAML::Node();  // null: absent
 }
 
 int YamlInt(const YAML::Node& node, const std::string& key, const std::string& path) {
@@ -245,8 +248,11 @@ std::vector<double> YamlMatrix(const YAML::Node& node, const std::string& key,
   return values;
 }
 
-PinholeCamera ReadRos(const YAML::Node& root, const std::string& path) {
-  UNSEEN_CHECK(root.IsMap(), "{}: expected a YAML mapping (ROS camera_info)", path);
+// The fields of either layout: OpenCV's (image_width, camera_matrix {rows, cols, dt, data},
+// distortion_coefficients) and ROS camera_info's (the same names and distortion_model, or the
+// message's width, K, D).
+PinholeCamera ReadFields(const YAML::Node& root, const std::string& path) {
+  UNSEEN_CHECK(root.IsMap(), "{}: expected a mapping of calibration fields", path);
   const int width = YamlInt(Field(root, {"image_width", "width"}, path, true), "image_width", path);
   const int height =
       YamlInt(Field(root, {"image_height", "height"}, path, true), "image_height", path);
@@ -254,7 +260,7 @@ PinholeCamera ReadRos(const YAML::Node& root, const std::string& path) {
       YamlMatrix(Field(root, {"camera_matrix", "K", "k"}, path, true), "camera_matrix", path, 3, 3);
   const YAML::Node model_node = Field(root, {"distortion_model"}, path, false);
   std::string model = "plumb_bob";
-  if (model_node) {
+  if (model_node && !model_node.IsNull()) {
     UNSEEN_CHECK(model_node.IsScalar(), "{}: field \"distortion_model\" must be a string", path);
     model = model_node.Scalar();
   }
@@ -273,13 +279,14 @@ PinholeCamera ReadRos(const YAML::Node& root, const std::string& path) {
 }  // namespace
 
 PinholeCamera LoadOpenCvCalibration(const std::string& path) {
-  return LoadOpenCvText(path, ReadText(path));
+  const std::string text = ReadText(path);
+  return ReadFields(ParseOpenCv(path, text), path);
 }
 
 PinholeCamera LoadRosCameraInfo(const std::string& path) {
   const std::string text = ReadText(path);
-  const YAML::Node root = ParseYamlText(text, path);
-  return ReadRos(root, path);
+  CheckText(path, text);
+  return ReadFields(ParseYaml(path, text, "YAML"), path);
 }
 
 PinholeCamera LoadCameraCalibration(const std::string& path) {
@@ -288,7 +295,7 @@ PinholeCamera LoadCameraCalibration(const std::string& path) {
   UNSEEN_CHECK(!trimmed.empty(), "{}: calibration file is empty", path);
   const bool opencv = trimmed.rfind("%YAML", 0) == 0 || trimmed.rfind("<", 0) == 0 ||
                       text.find("opencv-matrix") != std::string::npos;
-  if (opencv) return LoadOpenCvText(path, text);
+  if (opencv) return LoadOpenCvCalibration(path);
   return LoadRosCameraInfo(path);
 }
 

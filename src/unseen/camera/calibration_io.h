@@ -1,7 +1,8 @@
 // unseen — Copyright the unseen authors. SPDX-License-Identifier: BSD-3-Clause
 //
 // Camera calibration files: OpenCV's (as written by its calibration tools through
-// cv::FileStorage, YAML or XML) and ROS camera_info YAML (camera_calibration_parsers).
+// cv::FileStorage, YAML, XML or JSON) and ROS camera_info YAML (camera_calibration_parsers).
+// They are read with yaml-cpp (YAML, JSON) and pugixml (XML), not cv::FileStorage.
 // Both use OpenCV's pixel convention (integer coordinates at pixel centres) and
 // distortion order [k1, k2, p1, p2, k3, ...], the same as PinholeCamera, so values are
 // taken as they are.

@@ -118,6 +118,58 @@ TEST(CalibrationIo, ReadsRosCameraInfo) {
   ExpectCamera(LoadCameraCalibration(msg), 640, 480, 500, 500, 319.5, 239.5, {});
 }
 
+// As OpenCV writes XML (cv::FileStorage), with a matrix's values in one <data> element.
+const char kOpenCvXml[] = R"(<?xml version="1.0"?>
+<opencv_storage>
+<image_width>640</image_width>
+<image_height>480</image_height>
+<camera_matrix type_id="opencv-matrix">
+  <rows>3</rows>
+  <cols>3</cols>
+  <dt>d</dt>
+  <data>
+    5.2536e+02 0. 3.1925e+02 0. 5.2610e+02 2.4112e+02 0. 0. 1.</data></camera_matrix>
+<distortion_coefficients type_id="opencv-matrix">
+  <rows>5</rows>
+  <cols>1</cols>
+  <dt>d</dt>
+  <data>
+    1.5e-01 -3.1e-01 1.2e-03 -4.0e-04 1.1e-01</data></distortion_coefficients>
+</opencv_storage>
+)";
+
+TEST(CalibrationIo, ReadsOpenCvXml) {
+  const std::string path = WriteText(TestDir() / "calib.xml", kOpenCvXml);
+  ExpectCamera(LoadCameraCalibration(path), 640, 480, 525.36, 526.10, 319.25, 241.12,
+               {0.15, -0.31, 0.0012, -0.0004, 0.11});
+  ExpectCamera(LoadOpenCvCalibration(path), 640, 480, 525.36, 526.10, 319.25, 241.12,
+               {0.15, -0.31, 0.0012, -0.0004, 0.11});
+}
+
+// Inputs on which OpenCV's own readers (cv::FileStorage) hang or crash are refused with an
+// error: a YAML mapping indented on its first line and followed by a line ending in '-'
+// (OpenCV's parser loops forever looking for a next document), and a malformed XML
+// declaration (its parser reads through a null pointer).
+TEST(CalibrationIo, RejectsInputThatBreaksOpenCvsOwnReaders) {
+  const fs::path dir = TestDir();
+  const std::string second_document = "%YAML:1.0\n i: 1\nabc-\nc\n";
+  ExpectError([&] { LoadOpenCvCalibration(WriteText(dir / "d.yaml", second_document)); },
+              {"d.yaml", "\"image_width\"", "missing"});
+  ExpectError([&] { LoadCameraCalibration(WriteText(dir / "e.yaml", second_document)); },
+              {"e.yaml", "\"image_width\"", "missing"});
+  ExpectError([&] { LoadCameraCalibration(WriteText(dir / "x.xml", "<?xml veon=")); },
+              {"x.xml", "malformed OpenCV calibration file (XML)"});
+  std::string wrong_root = kOpenCvXml;
+  wrong_root = Replace(Replace(wrong_root, "<opencv_storage>", "<storage>"), "</opencv_storage>",
+                       "</storage>");
+  ExpectError([&] { LoadCameraCalibration(WriteText(dir / "r.xml", wrong_root)); },
+              {"r.xml", "<storage>", "<opencv_storage>"});
+  std::string short_data = kOpenCvXml;
+  short_data = Replace(short_data, " 0. 0. 1.</data>", " 0. 0.</data>");
+  ExpectError([&] { LoadCameraCalibration(WriteText(dir / "s.xml", short_data)); },
+              {"s.xml", "\"camera_matrix\"", "8 values"});
+}
+
 TEST(CalibrationIo, WriteReadRoundTrip) {
   const fs::path dir = TestDir();
   PinholeCamera camera;
