@@ -183,6 +183,12 @@ YAML::Node ParseOpenCv(const std::string& path, const std::string& text) {
   return ParseYaml(path, text, "OpenCV calibration file (YAML/JSON)");
 }
 
+// A ROS camera_info file (YAML) as a tree.
+YAML::Node ParseRos(const std::string& path, const std::string& text) {
+  CheckText(path, text);
+  return ParseYaml(path, text, "YAML");
+}
+
 // --- Fields -----------------------------------------------------------------------------
 
 YAML::Node Field(const YAML::Node& root, std::initializer_list<const char*> keys,
@@ -279,14 +285,11 @@ PinholeCamera ReadFields(const YAML::Node& root, const std::string& path) {
 }  // namespace
 
 PinholeCamera LoadOpenCvCalibration(const std::string& path) {
-  const std::string text = ReadText(path);
-  return ReadFields(ParseOpenCv(path, text), path);
+  return ReadFields(ParseOpenCv(path, ReadText(path)), path);
 }
 
 PinholeCamera LoadRosCameraInfo(const std::string& path) {
-  const std::string text = ReadText(path);
-  CheckText(path, text);
-  return ReadFields(ParseYaml(path, text, "YAML"), path);
+  return ReadFields(ParseRos(path, ReadText(path)), path);
 }
 
 PinholeCamera LoadCameraCalibration(const std::string& path) {
@@ -295,8 +298,7 @@ PinholeCamera LoadCameraCalibration(const std::string& path) {
   UNSEEN_CHECK(!trimmed.empty(), "{}: calibration file is empty", path);
   const bool opencv = trimmed.rfind("%YAML", 0) == 0 || trimmed.rfind("<", 0) == 0 ||
                       text.find("opencv-matrix") != std::string::npos;
-  if (opencv) return LoadOpenCvCalibration(path);
-  return LoadRosCameraInfo(path);
+  return ReadFields(opencv ? ParseOpenCv(path, text) : ParseRos(path, text), path);
 }
 
 void SaveOpenCvCalibration(const std::string& path, const PinholeCamera& camera) {
