@@ -92,6 +92,16 @@ class ModalityScene : public ::testing::Test {
     return as_next_frame ? tracker.Track({image}) : tracker.Align({image}, truth_, 1);
   }
 
+  // `tracker` (of the flat cube) started at the truth and tracked over frame_ (colour and
+  // depth) four times: the last frame's result, with the references learnt.
+  TrackResult TrackedAtTruth(Tracker* tracker) const {
+    tracker->Initialize(truth_);
+    TrackResult r;
+    for (int k = 0; k < 4; ++k) r = tracker->Track(frame_);
+    EXPECT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
+    return r;
+  }
+
   Mesh flat_;
   cv::Mat background_;
   Frame frame_;
@@ -505,10 +515,7 @@ TEST_F(ModalityScene, AFewSilhouetteLinesFarOffTheirContourAreNotOutvotedByTheSi
   // and 10x as far off their contour as the confident frames' were. The lines that spoke
   // contradict the pose: the silent ones no longer outvote them, though the depth agrees.
   Tracker tracker(rig_, flat_);
-  tracker.Initialize(truth_);
-  TrackResult r;
-  for (int k = 0; k < 4; ++k) r = tracker.Track(frame_);
-  ASSERT_EQ(r.status, TrackStatus::kTracking) << r.BriefReport();
+  const TrackResult r = TrackedAtTruth(&tracker);
   ASSERT_GT(r.summary.region_residual, 0.0) << r.BriefReport();
   ASSERT_GT(r.summary.depth_counts.Agreement(TrackerOptions().depth),
             TrackerOptions().depth.good_agreement)
@@ -524,6 +531,41 @@ TEST_F(ModalityScene, AFewSilhouetteLinesFarOffTheirContourAreNotOutvotedByTheSi
   EXPECT_NEAR(tracker.Confidence(few_speak), 0.7, 0.01) << r.BriefReport();
   EXPECT_LT(tracker.Confidence(few_far_off), TrackerOptions().failure.lost_confidence)
       << r.BriefReport();
+}
+
+TEST_F(ModalityScene, DepthThatAgreesEverywhereVouchesForAFrameOnItsContour) {
+  // The untextured cube tracked with depth at the true pose; then the same frame's summary
+  // as a motion blur leaves it: the silhouette 5 standard deviations off its contour, 5x
+  // its confident frames' (floored at 1), so that its own judgement gives nothing. The
+  // measured depth agrees on nearly every point and the contour is within
+  // depth_vouch_max_region_ratio: the frame is held doubtful but tracked. Not when the
+  // depth agrees on less, nor with the contour 10x off (a pose the depth is fooled by),
+  // nor when few of its lines speak, nor with the rule off.
+  Tracker tracker(rig_, flat_);
+  const TrackResult r = TrackedAtTruth(&tracker);
+  ASSERT_LT(r.summary.region_residual, 1.0) << r.BriefReport();
+  const FailureOptions& f = TrackerOptions().failure;
+  const DepthCounts& depth = r.summary.depth_counts;
+  ASSERT_GE(depth.agreeing, f.depth_vouch_agreement * depth.measured) << r.BriefReport();
+  ASSERT_GE(depth.measured, f.depth_vouch_min_measured) << r.BriefReport();
+  SolveSummary blurred = r.summary;
+  blurred.region_residual = 5.0;
+  EXPECT_DOUBLE_EQ(tracker.Confidence(blurred), f.depth_vouch_confidence) << r.BriefReport();
+  SolveSummary partly = blurred;
+  partly.depth_counts.agreeing = partly.depth_counts.measured * 85 / 100;
+  EXPECT_LT(tracker.Confidence(partly), f.lost_confidence);
+  SolveSummary far_off = blurred;
+  far_off.region_residual = 10.0;
+  EXPECT_LT(tracker.Confidence(far_off), f.lost_confidence);
+  SolveSummary few_speak = blurred;
+  few_speak.region_counts.used = few_speak.region_counts.lines * 3 / 10;
+  ASSERT_GE(few_speak.region_counts.used, f.min_region_lines);
+  EXPECT_LT(tracker.Confidence(few_speak), f.lost_confidence);
+  TrackerOptions off;
+  off.failure.depth_vouch_agreement = 0.0;
+  Tracker unvouched(rig_, flat_, off);
+  TrackedAtTruth(&unvouched);
+  EXPECT_LT(unvouched.Confidence(blurred), f.lost_confidence);
 }
 
 // The textured cube at rest, half hidden by a plate that covers its right part and contour

@@ -266,6 +266,9 @@ class Tracker {
   // The region modality's residual over the running mean of the confident frames' (with
   // FailureOptions::min_reference_region_residual as its floor); 0 before any.
   double RegionResidualRatio(const SolveSummary& summary) const;
+  // Whether the measured depth, with the silhouette on its contour, vouches for a tracked
+  // frame (FailureOptions::depth_vouch_agreement).
+  bool DepthVouches(const SolveSummary& summary) const;
   // Whether the photometric fit judges the frames (in use and not demoted).
   bool PhotometricJudges() const { return use_photometric_ && !photometric_demoted_; }
   // Whether an alignment's coarse levels leave the depth rows out: the frame carries depth

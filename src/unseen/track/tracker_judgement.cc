@@ -112,7 +112,24 @@ double Tracker::ModalityConfidence(const SolveSummary& s, bool with_references) 
     const double informative = double(s.region_counts.used) / double(s.region_counts.lines);
     silhouette = residual_term * (1.0 - informative * (1.0 - agreement_term));
   }
-  return depth_term * std::max(photometric, silhouette);
+  const double confidence = depth_term * std::max(photometric, silhouette);
+  return with_references && DepthVouches(s) ? std::max(confidence, f.depth_vouch_confidence)
+                                            : confidence;
+}
+
+bool Tracker::DepthVouches(const SolveSummary& s) const {
+  const FailureOptions& f = options_.failure;
+  const DepthCounts& depth = s.depth_counts;
+  if (f.depth_vouch_agreement <= 0.0 || depth.measured < f.depth_vouch_min_measured ||
+      double(depth.agreeing) < f.depth_vouch_agreement * double(depth.measured)) {
+    return false;
+  }
+  // The silhouette seen and on its contour: depth alone is fooled by a support plane.
+  const RegionCounts& lines = s.region_counts;
+  return options_.region.enabled && lines.used >= f.min_region_lines &&
+         double(lines.used) >= f.depth_vouch_min_line_share * double(lines.lines) &&
+         region_residual_reference_ > 0.0 &&
+         RegionResidualRatio(s) <= f.depth_vouch_max_region_ratio;
 }
 
 double Tracker::RegionResidualRatio(const SolveSummary& s) const {

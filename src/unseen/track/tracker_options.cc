@@ -123,6 +123,18 @@ void FailureOptions::Check() const {
                "failure.coast_frames {} must be in [0, 1000]", coast_frames);
   UNSEEN_CHECK(search_offset > 0.0 && search_offset <= 10.0,
                "failure.search_offset {} must be in (0, 10]", search_offset);
+  UNSEEN_CHECK(depth_vouch_agreement >= 0.0 && depth_vouch_agreement <= 1.0,
+               "failure.depth_vouch_agreement {} must be in [0, 1]", depth_vouch_agreement);
+  UNSEEN_CHECK(depth_vouch_min_measured >= 1, "failure.depth_vouch_min_measured {} must be >= 1",
+               depth_vouch_min_measured);
+  UNSEEN_CHECK(depth_vouch_max_region_ratio > 0.0 && std::isfinite(depth_vouch_max_region_ratio),
+               "failure.depth_vouch_max_region_ratio {} must be > 0", depth_vouch_max_region_ratio);
+  UNSEEN_CHECK(depth_vouch_min_line_share >= 0.0 && depth_vouch_min_line_share <= 1.0,
+               "failure.depth_vouch_min_line_share {} must be in [0, 1]",
+               depth_vouch_min_line_share);
+  UNSEEN_CHECK(depth_vouch_confidence >= 0.0 && depth_vouch_confidence < recover_confidence,
+               "failure.depth_vouch_confidence {} must be in [0, recover_confidence = {})",
+               depth_vouch_confidence, recover_confidence);
 }
 
 void ReacquisitionOptions::Check() const {
@@ -331,6 +343,11 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"min_area_ratio", YamlField(&fa.min_area_ratio)},
         {"good_area_ratio", YamlField(&fa.good_area_ratio)},
         {"area_memory_frames", YamlField(&fa.area_memory_frames)},
+        {"depth_vouch_agreement", YamlField(&fa.depth_vouch_agreement)},
+        {"depth_vouch_min_measured", YamlField(&fa.depth_vouch_min_measured)},
+        {"depth_vouch_max_region_ratio", YamlField(&fa.depth_vouch_max_region_ratio)},
+        {"depth_vouch_min_line_share", YamlField(&fa.depth_vouch_min_line_share)},
+        {"depth_vouch_confidence", YamlField(&fa.depth_vouch_confidence)},
         {"lost_confidence", YamlField(&fa.lost_confidence)},
         {"lost_after_frames", YamlField(&fa.lost_after_frames)},
         {"recover_confidence", YamlField(&fa.recover_confidence)},

@@ -113,6 +113,15 @@ TEST(TrackerOptions, ParsesTheReacquisitionSection) {
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {quiet_candidates: -2}"), Error);
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {accept_coasted_score: -0.1}"), Error);
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {doubtful_confidence: 1.5}"), Error);
+  EXPECT_DOUBLE_EQ(
+      ParseTrackerOptions("failure: {depth_vouch_agreement: 0.8}").failure.depth_vouch_agreement,
+      0.8);
+  EXPECT_THROW(ParseTrackerOptions("failure: {depth_vouch_agreement: 1.5}"), Error);
+  EXPECT_THROW(ParseTrackerOptions("failure: {depth_vouch_min_measured: 0}"), Error);
+  EXPECT_THROW(ParseTrackerOptions("failure: {depth_vouch_max_region_ratio: 0}"), Error);
+  EXPECT_THROW(ParseTrackerOptions("failure: {depth_vouch_min_line_share: -0.1}"), Error);
+  // A vouched frame must not re-acquire a lost object.
+  EXPECT_THROW(ParseTrackerOptions("failure: {depth_vouch_confidence: 0.5}"), Error);
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {search_radius: 3}"), Error);  // unknown
 }
 
