@@ -23,15 +23,33 @@ int KernelSize(double sigma_px) {
 
 }  // namespace
 
-cv::Mat LowPassDown(const cv::Mat& image, double sigma_px, int* factor_out) {
-  CheckFloat(image, "WideLowPass");
+int LowPassFactor(cv::Size size, double sigma_px) {
   UNSEEN_CHECK(sigma_px > 0.0 && std::isfinite(sigma_px), "WideLowPass: sigma_px {} must be > 0",
                sigma_px);
   int factor = 1;
   while (factor < 8 && sigma_px / (2 * factor) >= 2.0 &&
-         std::min(image.cols, image.rows) >= 8 * factor) {
+         std::min(size.width, size.height) >= 8 * factor) {
     factor *= 2;
   }
+  return factor;
+}
+
+cv::Mat BlurDownsampled(const cv::Mat& small, double sigma_px, int factor) {
+  CheckFloat(small, "BlurDownsampled");
+  UNSEEN_CHECK(factor >= 2, "BlurDownsampled: factor {} must be >= 2", factor);
+  // Area down-sampling is itself a box low-pass of width `factor` (variance factor^2/12);
+  // the remaining blur makes up the rest of the requested variance.
+  const double sigma_small =
+      std::sqrt(std::max(sigma_px * sigma_px - factor * factor / 12.0, 0.25)) / factor;
+  cv::Mat out;
+  cv::GaussianBlur(small, out, cv::Size(KernelSize(sigma_small), KernelSize(sigma_small)),
+                   sigma_small, sigma_small, cv::BORDER_REPLICATE);
+  return out;
+}
+
+cv::Mat LowPassDown(const cv::Mat& image, double sigma_px, int* factor_out) {
+  CheckFloat(image, "WideLowPass");
+  const int factor = LowPassFactor(image.size(), sigma_px);
   *factor_out = factor;
   cv::Mat small;
   if (factor == 1) {
@@ -39,12 +57,9 @@ cv::Mat LowPassDown(const cv::Mat& image, double sigma_px, int* factor_out) {
                      sigma_px, cv::BORDER_REPLICATE);
     return small;
   }
-  // Area down-sampling is itself a box low-pass of width `factor` (variance factor^2/12);
-  // the remaining blur makes up the rest of the requested variance. The image is padded
-  // (border replicated) to a multiple of `factor`, so that both resizes have an integer
-  // scale (OpenCV's fast paths) and the up-sampled pixels sit exactly on the blocks.
-  const double sigma_small =
-      std::sqrt(std::max(sigma_px * sigma_px - factor * factor / 12.0, 0.25)) / factor;
+  // The image is padded (border replicated) to a multiple of `factor`, so that both
+  // resizes have an integer scale (OpenCV's fast paths) and the up-sampled pixels sit
+  // exactly on the blocks.
   const int small_cols = (image.cols + factor - 1) / factor;
   const int small_rows = (image.rows + factor - 1) / factor;
   const int pad_cols = small_cols * factor - image.cols, pad_rows = small_rows * factor - image.rows;
@@ -53,9 +68,7 @@ cv::Mat LowPassDown(const cv::Mat& image, double sigma_px, int* factor_out) {
     cv::copyMakeBorder(image, padded, 0, pad_rows, 0, pad_cols, cv::BORDER_REPLICATE);
   }
   cv::resize(padded, small, cv::Size(small_cols, small_rows), 0, 0, cv::INTER_AREA);
-  cv::GaussianBlur(small, small, cv::Size(KernelSize(sigma_small), KernelSize(sigma_small)),
-                   sigma_small, sigma_small, cv::BORDER_REPLICATE);
-  return small;
+  return BlurDownsampled(small, sigma_px, factor);
 }
 
 cv::Mat LowPassUp(const cv::Mat& small, cv::Size size, int factor) {

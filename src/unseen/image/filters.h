@@ -26,6 +26,14 @@ cv::Mat WideLowPass(const cv::Mat& image, double sigma_px);
 cv::Mat LowPassDown(const cv::Mat& image, double sigma_px, int* factor);
 cv::Mat LowPassUp(const cv::Mat& small, cv::Size size, int factor);
 
+// LowPassDown's two steps, for a caller that area-down-samples by itself (summing only the
+// pixels it has instead of building the whole image first): the factor LowPassDown
+// chooses for an image of `size`, and the blur it gives the image down-sampled by it
+// (whose pixels average `factor` x `factor` blocks of the image padded, border replicated,
+// to a multiple of `factor`).
+int LowPassFactor(cv::Size size, double sigma_px);
+cv::Mat BlurDownsampled(const cv::Mat& small, double sigma_px, int factor);
+
 // Local Illumination Normalization Filter, SPEC 3.2 (4.11), per channel:
 //   I'(x, y) = 0.5 (I(x, y) + eps) / ((G * I)(x, y) + eps)
 // with G a Gaussian of `sigma_px` pixels (WideLowPass) and `epsilon` the noise constant
