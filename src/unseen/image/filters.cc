@@ -36,11 +36,14 @@ int LowPassFactor(cv::Size size, double sigma_px) {
 
 cv::Mat BlurDownsampled(const cv::Mat& small, double sigma_px, int factor) {
   CheckFloat(small, "BlurDownsampled");
-  UNSEEN_CHECK(factor >= 2, "BlurDownsampled: factor {} must be >= 2", factor);
+  UNSEEN_CHECK(factor >= 1, "BlurDownsampled: factor {} must be >= 1", factor);
   // Area down-sampling is itself a box low-pass of width `factor` (variance factor^2/12);
-  // the remaining blur makes up the rest of the requested variance.
+  // the remaining blur makes up the rest of the requested variance. Factor 1: the image
+  // itself, blurred by the whole sigma.
   const double sigma_small =
-      std::sqrt(std::max(sigma_px * sigma_px - factor * factor / 12.0, 0.25)) / factor;
+      factor == 1
+          ? sigma_px
+          : std::sqrt(std::max(sigma_px * sigma_px - factor * factor / 12.0, 0.25)) / factor;
   cv::Mat out;
   cv::GaussianBlur(small, out, cv::Size(KernelSize(sigma_small), KernelSize(sigma_small)),
                    sigma_small, sigma_small, cv::BORDER_REPLICATE);
@@ -51,12 +54,7 @@ cv::Mat LowPassDown(const cv::Mat& image, double sigma_px, int* factor_out) {
   CheckFloat(image, "WideLowPass");
   const int factor = LowPassFactor(image.size(), sigma_px);
   *factor_out = factor;
-  cv::Mat small;
-  if (factor == 1) {
-    cv::GaussianBlur(image, small, cv::Size(KernelSize(sigma_px), KernelSize(sigma_px)), sigma_px,
-                     sigma_px, cv::BORDER_REPLICATE);
-    return small;
-  }
+  if (factor == 1) return BlurDownsampled(image, sigma_px, 1);
   // The image is padded (border replicated) to a multiple of `factor`, so that both
   // resizes have an integer scale (OpenCV's fast paths) and the up-sampled pixels sit
   // exactly on the blocks.
@@ -67,6 +65,7 @@ cv::Mat LowPassDown(const cv::Mat& image, double sigma_px, int* factor_out) {
   if (pad_cols > 0 || pad_rows > 0) {
     cv::copyMakeBorder(image, padded, 0, pad_rows, 0, pad_cols, cv::BORDER_REPLICATE);
   }
+  cv::Mat small;
   cv::resize(padded, small, cv::Size(small_cols, small_rows), 0, 0, cv::INTER_AREA);
   return BlurDownsampled(small, sigma_px, factor);
 }

@@ -30,7 +30,7 @@ cv::Mat LowPassUp(const cv::Mat& small, cv::Size size, int factor);
 // pixels it has instead of building the whole image first): the factor LowPassDown
 // chooses for an image of `size`, and the blur it gives the image down-sampled by it
 // (whose pixels average `factor` x `factor` blocks of the image padded, border replicated,
-// to a multiple of `factor`).
+// to a multiple of `factor`; factor 1: the image itself).
 int LowPassFactor(cv::Size size, double sigma_px);
 cv::Mat BlurDownsampled(const cv::Mat& small, double sigma_px, int factor);
 

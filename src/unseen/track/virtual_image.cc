@@ -66,10 +66,10 @@ struct BandBackground {
 };
 
 // The fully covered pixels of `inside` (weight 1; all else 0) of the input (with the
-// weights as a fourth channel) and of the composite, low-passed at the coarse scale of
-// LowPassDown: area-down-sampled by `factor` straight from the covered pixels (the pixels
-// of the image padded to a multiple of `factor`, border replicated, count in the block of
-// the border pixel they copy), without the whole-region images LowPassDown would need.
+// weights as a fourth channel) and of the composite, low-passed as LowPassDown would the
+// whole-region images, but area-down-sampled by `factor` straight from the covered pixels
+// (a pixel of the image padded to a multiple of `factor`, border replicated, counts in the
+// block of the border pixel it copies): the whole-region images are never built.
 void CoveredLowPass(const cv::Mat& input_roi, const VirtualImage& w, const cv::Rect& inside,
                     double sigma_px, int factor, cv::Mat* real_low, cv::Mat* model_low) {
   const int width = w.composite.cols, height = w.composite.rows;
@@ -77,23 +77,23 @@ void CoveredLowPass(const cv::Mat& input_roi, const VirtualImage& w, const cv::R
   const int pad_cols = small_cols * factor - width, pad_rows = small_rows * factor - height;
   cv::Mat real(small_rows, small_cols, CV_32FC4, cv::Scalar::all(0.0)),
       model(small_rows, small_cols, CV_32FC3, cv::Scalar::all(0.0));
-  const float block_area = float(factor * factor);
+  const float per_pixel = 1.0f / float(factor * factor);  // a power of two: exact
   for (int y = inside.y; y < inside.y + inside.height; ++y) {
     const uint8_t* cov = w.coverage.ptr<uint8_t>(y);
     const float* in = input_roi.ptr<float>(y);
     const float* co = w.composite.ptr<float>(y);
     float* r = real.ptr<float>(y / factor);
     float* m = model.ptr<float>(y / factor);
-    const float copies_y = y == height - 1 ? float(1 + pad_rows) : 1.0f;
+    const float row_weight = (y == height - 1 ? float(1 + pad_rows) : 1.0f) * per_pixel;
     for (int x = inside.x; x < inside.x + inside.width; ++x) {
       if (cov[x] != 4) continue;
-      const float weight = (x == width - 1 ? float(1 + pad_cols) : 1.0f) * copies_y / block_area;
+      const float weight = x == width - 1 ? float(1 + pad_cols) * row_weight : row_weight;
       const int s = x / factor;
       for (int k = 0; k < 3; ++k) {
         r[4 * s + k] += weight * in[3 * x + k];
         m[3 * s + k] += weight * co[3 * x + k];
       }
-      r[4 * s + 3] += weight;
+      r[4 * s + 3] += weight;  // the support: share of fully covered pixels
     }
   }
   *real_low = BlurDownsampled(real, sigma_px, factor);
@@ -110,33 +110,10 @@ void TransferShading(const cv::Mat& input_roi, const PreprocessOptions& options,
   // does not leak in); their ratio is the shading the model lacks. The ratio is formed at
   // the low-pass's coarse scale and only it is up-sampled.
   // Outside `rendered` nothing is covered: zero weight there.
-  const int width = w.composite.cols, height = w.composite.rows;
   const double sigma = options.ShadingSigmaAtLevel(level);
-  int factor = LowPassFactor(w.composite.size(), sigma);
+  const int factor = LowPassFactor(w.composite.size(), sigma);
   cv::Mat real_low, model_low;
-  if (factor > 1) {
-    CoveredLowPass(input_roi, w, inside, sigma, factor, &real_low, &model_low);
-  } else {
-    cv::Mat real(height, width, CV_32FC4, cv::Scalar::all(0.0)),
-        model(height, width, CV_32FC3, cv::Scalar::all(0.0));
-    for (int y = inside.y; y < inside.y + inside.height; ++y) {
-      const uint8_t* cov = w.coverage.ptr<uint8_t>(y);
-      const float* in = input_roi.ptr<float>(y);
-      const float* co = w.composite.ptr<float>(y);
-      float* r = real.ptr<float>(y);
-      float* m = model.ptr<float>(y);
-      for (int x = inside.x; x < inside.x + inside.width; ++x) {
-        const float weight = cov[x] == 4 ? 1.0f : 0.0f;
-        for (int k = 0; k < 3; ++k) {
-          r[4 * x + k] = weight * in[3 * x + k];
-          m[3 * x + k] = weight * co[3 * x + k];
-        }
-        r[4 * x + 3] = weight;  // the support: share of fully covered pixels
-      }
-    }
-    real_low = LowPassDown(real, sigma, &factor);
-    model_low = LowPassDown(model, sigma, &factor);
-  }
+  CoveredLowPass(input_roi, w, inside, sigma, factor, &real_low, &model_low);
   cv::Mat gain_low(real_low.size(), CV_32FC3);
   for (int y = 0; y < gain_low.rows; ++y) {
     const float* r = real_low.ptr<float>(y);
