@@ -6,15 +6,16 @@
 // tracker_judgement.cc's, the appearance tracker_appearance.cc's.
 #include "unseen/track/tracker.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
-
-#include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
 #include "unseen/image/filters.h"
 #include "unseen/image/image_io.h"
+#include "unseen/render/silhouette_share.h"
 #include "unseen/track/flow_jacobian.h"
 #include "unseen/track/reacquisition.h"
 #include "unseen/track/virtual_image.h"
@@ -633,10 +634,19 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
           {&photometric_.equations(), &depth_.equations(), &region_.equations()}, options_.solver);
       if (coarsest && iteration == 0) s.start_region_counts += region_counts;
       if (level == finest) {
+        // The object's whole on-screen area: an object partly past the image border is as
+        // large as before, only partly out of view (FailureOptions::min_area_ratio).
         s.object_px = 0.0;
         for (int c = 0; c < ncam; ++c) {
           const CameraWork& w = *work_[c];
-          if (w.active && w.virtual_ok) s.object_px += cv::countNonZero(w.virtual_image.mask);
+          if (!w.active || !w.virtual_ok) continue;
+          const double min_share = options_.failure.min_in_image_share;
+          const double in_image =
+              min_share < 1.0
+                  ? SilhouetteShareInImage(*model_, w.camera, cam_from_world_[c] * round_pose,
+                                           box_corners_)
+                  : 1.0;
+          s.object_px += cv::countNonZero(w.virtual_image.mask) / std::max(in_image, min_share);
         }
         s.object_px *= double(1 << (2 * full_resolution));  // level-0 pixels
         s.depth_counts = depth_.counts();

@@ -108,6 +108,8 @@ void FailureOptions::Check() const {
   UNSEEN_CHECK(0.0 <= min_area_ratio && min_area_ratio < good_area_ratio && good_area_ratio <= 1.0,
                "failure: need 0 <= min_area_ratio ({}) < good_area_ratio ({}) <= 1",
                min_area_ratio, good_area_ratio);
+  UNSEEN_CHECK(min_in_image_share > 0.0 && min_in_image_share <= 1.0,
+               "failure.min_in_image_share {} must be in (0, 1]", min_in_image_share);
   UNSEEN_CHECK(area_memory_frames >= 0, "failure.area_memory_frames {} must be >= 0",
                area_memory_frames);
   UNSEEN_CHECK(lost_confidence >= 0.0 && lost_confidence <= 1.0,
@@ -342,6 +344,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"good_visible_fraction", YamlField(&fa.good_visible_fraction)},
         {"min_area_ratio", YamlField(&fa.min_area_ratio)},
         {"good_area_ratio", YamlField(&fa.good_area_ratio)},
+        {"min_in_image_share", YamlField(&fa.min_in_image_share)},
         {"area_memory_frames", YamlField(&fa.area_memory_frames)},
         {"depth_vouch_agreement", YamlField(&fa.depth_vouch_agreement)},
         {"depth_vouch_min_measured", YamlField(&fa.depth_vouch_min_measured)},

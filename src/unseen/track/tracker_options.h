@@ -220,6 +220,13 @@ struct FailureOptions {
   double min_area_ratio = 0.2;
   double good_area_ratio = 0.4;
   int area_memory_frames = 30;
+  // The area of an object partly past the image border is its whole silhouette's: the
+  // rendered part over the share of the silhouette inside the image (SilhouetteShareInImage,
+  // a coarse render of the whole), that share floored at min_in_image_share. An object
+  // leaving the view was lost while a fifth of it still showed, its pose right (a box
+  // moving out at the right border: 4 mm off, its area ratio 0.2). 1: the part in the
+  // image alone.
+  double min_in_image_share = 0.1;
   // Measured depth that agrees with the rendered surface almost everywhere vouches, with a
   // silhouette near its contour, for a tracked frame the image modalities doubt: agreeing
   // points (DepthModalityOptions::agree_distance_m) at least depth_vouch_agreement of all

@@ -122,6 +122,10 @@ TEST(TrackerOptions, ParsesTheReacquisitionSection) {
   EXPECT_THROW(ParseTrackerOptions("failure: {depth_vouch_min_line_share: -0.1}"), Error);
   // A vouched frame must not re-acquire a lost object.
   EXPECT_THROW(ParseTrackerOptions("failure: {depth_vouch_confidence: 0.5}"), Error);
+  EXPECT_DOUBLE_EQ(
+      ParseTrackerOptions("failure: {min_in_image_share: 1}").failure.min_in_image_share, 1.0);
+  EXPECT_THROW(ParseTrackerOptions("failure: {min_in_image_share: 0}"), Error);
+  EXPECT_THROW(ParseTrackerOptions("failure: {min_in_image_share: 1.2}"), Error);
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {search_radius: 3}"), Error);  // unknown
 }
 
