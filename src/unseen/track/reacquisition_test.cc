@@ -215,6 +215,42 @@ TEST_F(Reacquire, AProposedOrientationIsTriedWhereTheCorrelationFindsTheObject) 
   EXPECT_THROW(ParseTrackerOptions("reacquisition: {proposals: -1}\n"), Error);
 }
 
+// Candidates that all score 0 at first (still far from converged) are ranked by how much of
+// the image already agrees with them, not by the order they were made in: the one proposal
+// near the cube's turn, made last after seven far off, is kept by the successive halving
+// and finds the cube.
+TEST_F(Reacquire, TheCandidateTheImageAgreesWithMostSurvivesTheHalving) {
+  const Rigid3d back(ExpSO3(Eigen::Vector3d(0.0, 50.0 * kDeg, 0.0)) * CubePose().rotation(),
+                     CubePose().translation() + Eigen::Vector3d(0.12, 0.03, 0.0));
+  TrackerOptions options;
+  options.reacquisition.rotation_deg = 0.0;
+  options.reacquisition.proposals = 8;
+  Tracker tracker(rig_, cube_, options);
+  tracker.SetPoseProposer([&](const Frame&, int, const PixelRect&) {
+    std::vector<Rigid3d> proposals;
+    for (int k = 0; k < 7; ++k) {
+      const Eigen::Vector3d axis = Eigen::Vector3d(1.0, 0.3 * k, 0.5 - 0.2 * k).normalized();
+      proposals.emplace_back(ExpSO3((70.0 + 10.0 * k) * kDeg * axis) * back.rotation(),
+                             back.translation());
+    }
+    proposals.emplace_back(
+        ExpSO3(Eigen::Vector3d(0.1, 1.0, 0.3).normalized() * 14.0 * kDeg) * back.rotation(),
+        back.translation());
+    return proposals;
+  });
+  TrackThenHide(&tracker, 4);
+  int found = -1;
+  for (int k = 0; k < 4 && found < 0; ++k) {
+    const TrackResult r = tracker.Track({Image(back)});
+    const PoseDifference e = Difference(r.world_from_obj, back);
+    if (r.status == TrackStatus::kTracking && e.translation < 0.003 &&
+        e.rotation_rad < 1.0 * kDeg) {
+      found = k;
+    }
+  }
+  EXPECT_EQ(found, 0);
+}
+
 // While lost, the same reference poses are correlated frame after frame: their templates
 // are rendered and transformed once, and the seeds are those found without the cache.
 TEST_F(Reacquire, RepeatedCorrelationsReuseTheirTemplateRenders) {
