@@ -331,18 +331,20 @@ TEST_F(HiddenTurningCube, ThatStoppedBehindAnOccluderIsLookedForTurnedInPlace) {
   auto truth = [&](int k) {
     return Truth(k, Eigen::Vector3d(-0.03 + 0.012 * std::min(k, 5), -0.01, 1.0));
   };
-  // The gradient-magnitude correlation, whose seeds of the unturned cube do not find it
-  // (the colour correlation finds this cube's texture turned 40 degrees too).
+  // The search's other candidates off, so that what finds the cube is that turn alone (the
+  // correlation's seeds of the last pose seen, 40 degrees off, can be drawn to this plain
+  // cube too).
   TrackerOptions options;
-  options.reacquisition.colour_correlation = false;
+  options.reacquisition.use_correlation = false;
+  options.reacquisition.rotation_deg = 0.0;
   const TrackResult found = FirstFrameBack(options, truth);
   EXPECT_EQ(found.status, TrackStatus::kTracking) << found.BriefReport();
   EXPECT_EQ(found.summary.search_choice, 1) << found.BriefReport();
   const PoseDifference e = Difference(found.world_from_obj, truth(14));
   EXPECT_LT(e.translation, 0.005) << found.BriefReport();
   EXPECT_LT(e.rotation_rad, 2.0 * kDeg) << found.BriefReport();
-  // Without that candidate the search tries one pose fewer, and none of them finds the cube
-  // in this frame (the correlation's seeds are of the last pose seen, 40 degrees off).
+  // Without that candidate the search tries one pose fewer and none of them, all about
+  // the coasted pose or the last one seen, finds the cube in this frame.
   options.reacquisition.turn_in_place = false;
   const TrackResult without = FirstFrameBack(options, truth);
   EXPECT_EQ(without.summary.search_candidates + 1, found.summary.search_candidates);
