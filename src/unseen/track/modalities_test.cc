@@ -647,6 +647,12 @@ TEST(ModalityOptions, CheckRejectsNonsense) {
   EXPECT_FALSE(
       ParseTrackerOptions("region: {skip_occluded_lines: false}\n").region.skip_occluded_lines);
   EXPECT_THROW(ParseTrackerOptions("region: {occluded_probe_px: -1}\n"), Error);
+  const TrackerOptions margins =
+      ParseTrackerOptions("region: {foreground_margin_px: 0, background_margin_px: 3}\n");
+  EXPECT_EQ(margins.region.foreground_margin_px, 0);
+  EXPECT_EQ(margins.region.background_margin_px, 3);
+  EXPECT_THROW(ParseTrackerOptions("region: {background_margin_px: 12}\n"), Error);
+  EXPECT_THROW(ParseTrackerOptions("region: {foreground_margin_px: -1}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("failure: {min_visible_fraction: 0.6}\n"), Error);
   EXPECT_EQ(ParseTrackerOptions("failure: {occluded_region_share: 0.8}\n")
                 .failure.occluded_region_share,

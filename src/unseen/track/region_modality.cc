@@ -17,8 +17,12 @@ void RegionModalityOptions::Check() const {
   UNSEEN_CHECK(max_lines >= 6 && max_lines <= 100000, "region.max_lines {} must be in [6, 1e5]",
                max_lines);
   UNSEEN_CHECK(line_px >= 2 && line_px <= 64, "region.line_px {} must be in [2, 64]", line_px);
-  UNSEEN_CHECK(learn_margin_px >= 0 && learn_margin_px < line_px,
-               "region.learn_margin_px {} must be in [0, line_px = {})", learn_margin_px, line_px);
+  UNSEEN_CHECK(foreground_margin_px >= 0 && foreground_margin_px < line_px,
+               "region.foreground_margin_px {} must be in [0, line_px = {})", foreground_margin_px,
+               line_px);
+  UNSEEN_CHECK(background_margin_px >= 0 && background_margin_px < line_px,
+               "region.background_margin_px {} must be in [0, line_px = {})", background_margin_px,
+               line_px);
   UNSEEN_CHECK(learn_rate > 0.0 && learn_rate <= 1.0, "region.learn_rate {} must be in (0, 1]",
                learn_rate);
   UNSEEN_CHECK(edge_contradiction_px >= 0.0 && std::isfinite(edge_contradiction_px),
@@ -270,8 +274,8 @@ void AddRegionEquations(const RegionModalityInput& in, const RegionModalityOptio
       posterior[k] = solve ? histograms->Posterior(bins[k]) : 0.5f;
       if (learn) {
         const float s = float(k - half) + 0.5f;
-        if (s < -options.learn_margin_px) histograms->Count(bgr, true);
-        if (s > options.learn_margin_px) histograms->Count(bgr, false);
+        if (s < -options.foreground_margin_px) histograms->Count(bgr, true);
+        if (s > options.background_margin_px) histograms->Count(bgr, false);
       }
     }
     const bool edge_on_contour = largest_step > 0.0f && std::abs(step_at - half) <= 1;

@@ -184,5 +184,43 @@ TEST(RegionModality, LinesWhoseColoursRunPastTheirEndCanBeLeftOut) {
   EXPECT_THROW(ParseTrackerOptions("region: {skip_overrun_lines: maybe}\n"), Error);
 }
 
+// A square object whose outermost 2 px are of a colour of their own (a shaded underside, a
+// dark edge), before a grey background with a few dots of that colour. Learnt at the true
+// contour, the rim is the object's from its second pixel in
+// (RegionModalityOptions::foreground_margin_px 1) and the lines sit within half a standard
+// deviation of the contour; left out of the foreground (a margin of 2), its colour is the
+// background's and the lines place the contour several standard deviations inside.
+TEST(RegionModality, TheObjectsOwnRimTeachesTheForeground) {
+  const cv::Vec3f grey(0.6f, 0.6f, 0.6f), blue(0.1f, 0.1f, 0.9f), rim(0.15f, 0.3f, 0.45f);
+  SquareScene scene(grey, rim);
+  for (int y = 4; y < SquareScene::kSize; y += 8) {
+    for (int x = 4; x < SquareScene::kSize; x += 8) scene.image.at<cv::Vec3f>(y, x) = rim;
+  }
+  scene.image(scene.square).setTo(rim);
+  const cv::Rect core(scene.square.x + 2, scene.square.y + 2, scene.square.width - 4,
+                      scene.square.height - 4);
+  scene.image(core).setTo(blue);
+  // The mean offset of the rows (contour offsets in standard deviations; < 0: inside).
+  auto mean_offset = [&](const RegionModalityOptions& options) {
+    ColorHistograms histograms(options.bins_per_channel);
+    scene.Learn(options, &histograms);
+    EXPECT_TRUE(histograms.learnt());
+    FlowEquations rows;
+    RegionCounts counts;
+    AddRegionEquations(scene.Input(), options, /*learn=*/false, &histograms, &rows, &counts);
+    EXPECT_GT(counts.used, 100);
+    double sum = 0.0;
+    for (float b : rows.rhs) sum += b;
+    return rows.rhs.empty() ? 0.0 : sum / double(rows.rhs.size());
+  };
+  RegionModalityOptions options;
+  ASSERT_EQ(options.foreground_margin_px, 1);
+  const double taught = mean_offset(options);
+  EXPECT_GT(taught, -0.6);
+  EXPECT_LT(taught, 0.3);
+  options.foreground_margin_px = 2;
+  EXPECT_LT(mean_offset(options), -2.5);
+}
+
 }  // namespace
 }  // namespace unseen
