@@ -226,12 +226,13 @@ TEST_F(AppearanceChange, ATextureThatDragsThePoseOffItsSilhouetteIsDemoted) {
 
 TEST(AppearanceChangeOptions, ParsedAndChecked) {
   const TrackerOptions o = ParseTrackerOptions(
-      "photometric: {dragged_weight: 0.2, light_change_fit: 0.4, "
+      "photometric: {dragged_weight: 0.2, dragged_open_ratio: 2.5, light_change_fit: 0.4, "
       "light_change_max_gathering: 0.6, start_by_silhouette: false, silhouette_drag_ratio: 2, "
       "silhouette_drag_led_ratio: 0.9}\n"
       "live_appearance: {poor_fit_share: 0.3, poor_fit_frames: 4, poor_fit_best_share: 0.5, "
       "poor_fit_confidence: 0.6}\n");
   EXPECT_EQ(o.photometric.dragged_weight, 0.2);
+  EXPECT_EQ(o.photometric.dragged_open_ratio, 2.5);
   EXPECT_EQ(o.photometric.light_change_fit, 0.4);
   EXPECT_EQ(o.photometric.light_change_max_gathering, 0.6);
   EXPECT_FALSE(o.photometric.start_by_silhouette);
@@ -243,6 +244,7 @@ TEST(AppearanceChangeOptions, ParsedAndChecked) {
   EXPECT_EQ(o.live_appearance.poor_fit_best_share, 0.5);
   EXPECT_EQ(o.live_appearance.poor_fit_confidence, 0.6);
   EXPECT_THROW(ParseTrackerOptions("photometric: {dragged_weight: 1.5}\n"), Error);
+  EXPECT_THROW(ParseTrackerOptions("photometric: {dragged_open_ratio: -1}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("photometric: {light_change_fit: -0.1}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("photometric: {light_change_max_gathering: .nan}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("photometric: {silhouette_drag_ratio: -1}\n"), Error);

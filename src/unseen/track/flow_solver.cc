@@ -107,6 +107,8 @@ void ResidualModel::Check(const std::string& what) const {
   UNSEEN_CHECK(max_noise >= min_noise && !std::isnan(max_noise),
                "{}.max_noise {} must be >= min_noise {}", what, max_noise, min_noise);
   UNSEEN_CHECK(weight > 0.0 && std::isfinite(weight), "{}.weight {} must be > 0", what, weight);
+  UNSEEN_CHECK(subordinate_ratio >= 0.0 && std::isfinite(subordinate_ratio),
+               "{}.subordinate_ratio {} must be >= 0", what, subordinate_ratio);
 }
 
 int ModalityEquations::size() const {
@@ -203,11 +205,34 @@ namespace {
 // The per-modality working state of the solve.
 struct ModalityWork {
   const ModalityEquations* eq = nullptr;
+  Matrix6d h = Matrix6d::Zero();  // this pass's share of the normal equations
+  Vector6d g = Vector6d::Zero();
   std::vector<std::vector<float>> weights;  // per camera; residuals before they become weights
   std::vector<float> abs_normalized, abs_row;
   double noise = 0.0;
   ModalityStats stats;
 };
+
+// A subordinate modality's share (h, g) kept only where the leading modalities' normal
+// matrix `lead` leaves the twist open (ResidualModel::subordinate_ratio): in the generalized
+// eigenbasis X of (h, lead), X^T lead X = I and X^T h X = diag(mu), so h = lead X diag(mu)
+// X^T lead and g = lead X (X^T g); each direction is scaled by max(0, 1 - ratio / mu).
+// The generalized problem is invariant to the twist's units (radians against metres).
+void KeepWhereOpen(const Matrix6d& lead, double ratio, Matrix6d* h, Vector6d* g) {
+  // A ridge relative to each coordinate's own scale keeps `lead` positive definite where
+  // the leading modalities see nothing at all (there the subordinate counts fully).
+  Matrix6d b = lead;
+  b.diagonal() += 1e-9 * (lead.diagonal() + h->diagonal()) +
+                  Vector6d::Constant(1e-12 * (lead.trace() + h->trace()) / 6.0);
+  Eigen::GeneralizedSelfAdjointEigenSolver<Matrix6d> solver(*h, b);
+  if (solver.info() != Eigen::Success) return;  // kept whole
+  const Matrix6d bx = b * solver.eigenvectors();
+  const Vector6d mu = solver.eigenvalues().cwiseMax(0.0);
+  Vector6d keep;
+  for (int i = 0; i < 6; ++i) keep(i) = mu(i) > ratio ? 1.0 - ratio / mu(i) : 0.0;
+  *g = bx * keep.cwiseProduct(solver.eigenvectors().transpose() * *g);
+  *h = bx * keep.cwiseProduct(mu).asDiagonal() * bx.transpose();
+}
 
 }  // namespace
 
@@ -258,10 +283,12 @@ FlowSolution SolveJoint(const std::vector<const ModalityEquations*>& modalities,
     Matrix6d h = Matrix6d::Zero();
     Vector6d g = Vector6d::Zero();
     double modality_damping = 0.0;  // sum over modalities of damping * trace(H_m) / 6
+    Matrix6d lead = Matrix6d::Zero();  // the modalities that are not subordinate
     for (ModalityWork& mw : work) {
+      mw.h.setZero();
+      mw.g.setZero();
       if (mw.stats.equations == 0) continue;
       const double lambda = mw.eq->model.weight / (mw.noise * mw.noise);
-      const double trace_before = h.trace();
       for (size_t c = 0; c < mw.eq->cameras.size(); ++c) {
         const FlowEquations& eq = mw.eq->cameras[c];
         if (eq.size() == 0) continue;
@@ -273,10 +300,19 @@ FlowSolution SolveJoint(const std::vector<const ModalityEquations*>& modalities,
         const Eigen::Matrix3d r_cw = eq.world_from_cam_rotation.transpose();
         b.topLeftCorner<3, 3>() = r_cw;
         b.bottomRightCorner<3, 3>() = r_cw;
-        h.noalias() += lambda * (b.transpose() * hc * b);
-        g.noalias() += lambda * (b.transpose() * gc);
+        mw.h.noalias() += lambda * (b.transpose() * hc * b);
+        mw.g.noalias() += lambda * (b.transpose() * gc);
       }
-      modality_damping += mw.eq->model.damping * (h.trace() - trace_before) / 6.0;
+      if (mw.eq->model.subordinate_ratio <= 0.0) lead += mw.h;
+    }
+    for (ModalityWork& mw : work) {
+      if (mw.stats.equations == 0) continue;
+      if (mw.eq->model.subordinate_ratio > 0.0 && lead.trace() > 0.0) {
+        KeepWhereOpen(lead, mw.eq->model.subordinate_ratio, &mw.h, &mw.g);
+      }
+      h += mw.h;
+      g += mw.g;
+      modality_damping += mw.eq->model.damping * mw.h.trace() / 6.0;
     }
     const double trace = h.trace();
     if (!(trace > 0.0) || !std::isfinite(trace)) break;

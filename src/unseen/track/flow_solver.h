@@ -73,6 +73,13 @@ struct ResidualModel {
   // diagonal of its own share of them (trace / 6): it steadies the directions it leaves
   // weakly determined without slowing the others' (which add their own, if any).
   double damping = 0.0;
+  // 0: the rows count in every direction of the twist. > 0: the modality is subordinate, it
+  // settles what the others leave open: along each generalized eigendirection of its normal
+  // matrix against theirs (mu: its information there relative to theirs together) its rows
+  // count with max(0, 1 - subordinate_ratio / mu), none where mu <= subordinate_ratio.
+  // A demoted texture (a model's colours that drag the silhouette) still settles the spin
+  // about an axis of symmetry but no longer pulls where the silhouette holds the pose.
+  double subordinate_ratio = 0.0;
   void Check(const std::string& what) const;
 };
 

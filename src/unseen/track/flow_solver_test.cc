@@ -294,6 +294,55 @@ TEST(FlowSolver, RobustSigmaIsTheMedianOfItsSpread) {
   EXPECT_EQ(RobustSigma(&none), 0.0);
 }
 
+TEST(FlowSolver, ASubordinateModalitySettlesOnlyWhatTheOthersLeaveOpen) {
+  // The leading modality determines five of the six twist components and nothing of the
+  // last; a subordinate one, biased, sees all six. Subordinate, it settles the last
+  // component and leaves the others to the lead; an equal partner, it pulls all six.
+  std::mt19937 rng(23);
+  std::normal_distribution<float> n01(0.0f, 1.0f);
+  Vector6d lead_truth, biased;
+  lead_truth << 0.002, 0.001, -0.003, 0.01, 0.005, -0.02;
+  biased = lead_truth + Vector6d::Constant(0.004);
+  // Rows in pairs whose last entries differ in sign only: the last component is
+  // uncorrelated with the others, so the open one's estimate is the subordinate's own.
+  auto equations = [&](const Vector6d& twist, bool sees_last) {
+    FlowEquations eq;
+    for (int i = 0; i < 300; ++i) {
+      float row[6];
+      for (int k = 0; k < 6; ++k) row[k] = k < 5 || sees_last ? n01(rng) : 0.0f;
+      for (int sign : {1, -1}) {
+        row[5] *= static_cast<float>(sign);
+        const Eigen::Map<const Eigen::Matrix<float, 6, 1>> a(row);
+        eq.Add(row, a.dot(twist.cast<float>()), 1.0f);
+      }
+    }
+    return eq;
+  };
+  ModalityEquations lead, subordinate;
+  lead.cameras = {equations(lead_truth, false)};
+  subordinate.cameras = {equations(biased, true)};
+  for (ModalityEquations* m : {&lead, &subordinate}) {
+    m->model.kernel = RobustKernel::kNone;
+    m->model.min_noise = m->model.max_noise = 1.0;  // fixed weights
+  }
+  subordinate.model.weight = 0.3;  // about 0.3 of the lead's information where both see
+  FlowSolverOptions options;
+  options.damping = 0.0;
+  const Vector6d partner = SolveJoint({&lead, &subordinate}, options).twist;
+  subordinate.model.subordinate_ratio = 1.0;
+  const Vector6d settled = SolveJoint({&lead, &subordinate}, options).twist;
+  // The five components the lead sees: the lead's own; pulled toward the bias as a partner.
+  EXPECT_LT((settled - lead_truth).head<5>().norm(), 0.05 * 0.004) << settled.transpose();
+  EXPECT_GT((partner - lead_truth).head<5>().norm(), 0.3 * 0.004) << partner.transpose();
+  // The open one: the subordinate's, both ways.
+  EXPECT_NEAR(settled(5), biased(5), 0.1 * 0.004);
+  EXPECT_NEAR(partner(5), biased(5), 0.3 * 0.004);
+  // Alone, a subordinate modality solves as any other.
+  EXPECT_LT((SolveJoint({&subordinate}, options).twist - biased).norm(), 1e-4);
+  subordinate.model.subordinate_ratio = -1.0;
+  EXPECT_THROW(subordinate.model.Check("photometric"), Error);
+}
+
 TEST(FlowSolver, OptionsCheck) {
   FlowSolverOptions o;
   EXPECT_NO_THROW(o.Check());

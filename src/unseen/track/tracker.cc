@@ -453,7 +453,11 @@ TrackResult Tracker::AlignChecked(const Frame& frame, const Rigid3d& start, cons
   if (model_ == given_model_ && use_depth && !model_->projectors.empty()) {
     photometric_model.weight *= options_.photometric.projected_with_depth_ratio;
   }
-  if (photometric_demoted_) photometric_model.weight *= options_.photometric.dragged_weight;
+  photometric_model.subordinate_ratio = 0.0;
+  if (photometric_demoted_) {
+    photometric_model.weight *= options_.photometric.dragged_weight;
+    photometric_model.subordinate_ratio = options_.photometric.dragged_open_ratio;
+  }
   region_.DiscardPending();
   std::vector<int> jobs;  // c: camera c's virtual image; ncam + c: its input
   for (auto& w : work_) {

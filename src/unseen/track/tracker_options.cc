@@ -205,6 +205,8 @@ void PhotometricOptions::Check() const {
                "photometric.start_drag_ratio {} must be >= 1", start_drag_ratio);
   UNSEEN_CHECK(dragged_weight >= 0.0 && dragged_weight <= 1.0,
                "photometric.dragged_weight {} must be in [0, 1]", dragged_weight);
+  UNSEEN_CHECK(dragged_open_ratio >= 0.0 && std::isfinite(dragged_open_ratio),
+               "photometric.dragged_open_ratio {} must be >= 0", dragged_open_ratio);
   UNSEEN_CHECK(projected_with_depth_ratio > 0.0 && projected_with_depth_ratio <= 1.0,
                "photometric.projected_with_depth_ratio {} must be in (0, 1]",
                projected_with_depth_ratio);
@@ -247,6 +249,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"start_drag_px", YamlField(&ph.start_drag_px)},
         {"start_drag_ratio", YamlField(&ph.start_drag_ratio)},
         {"dragged_weight", YamlField(&ph.dragged_weight)},
+        {"dragged_open_ratio", YamlField(&ph.dragged_open_ratio)},
         {"projected_with_depth_ratio", YamlField(&ph.projected_with_depth_ratio)},
         {"light_change_fit", YamlField(&ph.light_change_fit)},
         {"light_change_max_gathering", YamlField(&ph.light_change_max_gathering)},

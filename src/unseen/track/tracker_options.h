@@ -398,6 +398,11 @@ struct PhotometricOptions {
   // the frames (the colours still settle what the silhouette leaves open, such as a spin
   // about an axis of near symmetry). 0: dropped.
   double dragged_weight = 0.1;
+  // A demoted model's colours settle only what the silhouette (and depth) leave open: along
+  // each direction of the twist its rows count with max(0, 1 - dragged_open_ratio / mu), mu
+  // their information there (at dragged_weight) against the other modalities' together
+  // (ResidualModel::subordinate_ratio). 0: they count in every direction.
+  double dragged_open_ratio = 1.0;
   // Light that changes while tracking (a moving or pulsing lamp; frames without depth):
   // when a tracked frame's photometric fit falls below light_change_fit while the
   // silhouette agrees with the image and sits on its contour (agreement of at least
