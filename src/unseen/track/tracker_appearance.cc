@@ -36,7 +36,8 @@ void Tracker::StartWithGivenModel() {
 bool Tracker::ColoursNeverFitted(const TrackResult& r) {
   const LiveAppearanceOptions& lo = options_.live_appearance;
   if (lo.poor_fit_frames <= 0 || live_appearance_ || !use_photometric_ || dragged_at_start_ ||
-      !options_.region.enabled || model_ != given_model_) {
+      (photometric_demoted_ && !lo.replace_demoted) || !options_.region.enabled ||
+      model_ != given_model_) {
     return false;
   }
   if (r.status != TrackStatus::kTracking || r.confidence < lo.poor_fit_confidence ||
