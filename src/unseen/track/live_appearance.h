@@ -79,13 +79,6 @@ struct LiveAppearanceOptions {
   int poor_fit_frames = 5;
   double poor_fit_best_share = 0.6;
   double poor_fit_confidence = 0.5;
-  // Whether colours that never fitted are replaced even when the tracker has demoted them
-  // (PhotometricOptions: they dragged the silhouette, or the light changed under them).
-  // false: a demoted model keeps its own colours, which settle what the silhouette leaves
-  // open; colours taken from the frames follow the tracked pose, so they cannot hold a spin
-  // the silhouette does not see and drift with it at full confidence (the red blobs from a
-  // start 4 deg off turned 48 deg; the glossy duck's third start 58 -> 100 %).
-  bool replace_demoted = false;
   void Check() const;
 };
 

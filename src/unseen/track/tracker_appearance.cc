@@ -36,8 +36,7 @@ void Tracker::StartWithGivenModel() {
 bool Tracker::ColoursNeverFitted(const TrackResult& r) {
   const LiveAppearanceOptions& lo = options_.live_appearance;
   if (lo.poor_fit_frames <= 0 || live_appearance_ || !use_photometric_ || dragged_at_start_ ||
-      (photometric_demoted_ && !lo.replace_demoted) || !options_.region.enabled ||
-      model_ != given_model_) {
+      !options_.region.enabled || model_ != given_model_) {
     return false;
   }
   if (r.status != TrackStatus::kTracking || r.confidence < lo.poor_fit_confidence ||
