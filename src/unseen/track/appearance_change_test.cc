@@ -120,6 +120,25 @@ TEST_F(AppearanceChange, ColoursThatNeverFittedComeFromTheFrames) {
   EXPECT_TRUE(kept.model().projectors.empty());
 }
 
+TEST_F(AppearanceChange, ColoursDemotedByTheLightAreKept) {
+  // Three frames under the model's light, then the deep grille: the light-change check
+  // demotes the colours, and the poor-fit check (its best share lifted out of the way)
+  // would then take colours from the frames. Demoted by the light, the model keeps its own
+  // (they settle what the silhouette leaves open; colours from the frames follow the pose).
+  relit_ = Relit(model_, 0.3f);
+  TrackerOptions options;
+  options.live_appearance.poor_fit_best_share = 1.0;
+  Tracker tracker(rig_, model_, options);
+  TrackSequence(&tracker, 14, 3);
+  EXPECT_TRUE(tracker.photometric_demoted());
+  EXPECT_TRUE(tracker.model().projectors.empty());
+  // Replaced after a light change too, they come from the frames.
+  options.live_appearance.replace_after_light_change = true;
+  Tracker replaced(rig_, model_, options);
+  TrackSequence(&replaced, 14, 3);
+  EXPECT_FALSE(replaced.model().projectors.empty());
+}
+
 TEST_F(AppearanceChange, AnOccluderIsNotTakenForColoursThatNeverFitted) {
   // The cube seen with its own colours, but a textured occluder (a patch of another scene)
   // hides the left half of it from the first frame on: few of its pixels survive, but the
@@ -230,7 +249,7 @@ TEST(AppearanceChangeOptions, ParsedAndChecked) {
       "light_change_max_gathering: 0.6, start_by_silhouette: false, silhouette_drag_ratio: 2, "
       "silhouette_drag_led_ratio: 0.9}\n"
       "live_appearance: {poor_fit_share: 0.3, poor_fit_frames: 4, poor_fit_best_share: 0.5, "
-      "poor_fit_confidence: 0.6}\n");
+      "poor_fit_confidence: 0.6, replace_after_light_change: true}\n");
   EXPECT_EQ(o.photometric.dragged_weight, 0.2);
   EXPECT_EQ(o.photometric.dragged_open_ratio, 2.5);
   EXPECT_EQ(o.photometric.light_change_fit, 0.4);
@@ -243,6 +262,8 @@ TEST(AppearanceChangeOptions, ParsedAndChecked) {
   EXPECT_EQ(o.live_appearance.poor_fit_frames, 4);
   EXPECT_EQ(o.live_appearance.poor_fit_best_share, 0.5);
   EXPECT_EQ(o.live_appearance.poor_fit_confidence, 0.6);
+  EXPECT_TRUE(o.live_appearance.replace_after_light_change);
+  EXPECT_FALSE(TrackerOptions().live_appearance.replace_after_light_change);
   EXPECT_THROW(ParseTrackerOptions("photometric: {dragged_weight: 1.5}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("photometric: {dragged_open_ratio: -1}\n"), Error);
   EXPECT_THROW(ParseTrackerOptions("photometric: {light_change_fit: -0.1}\n"), Error);

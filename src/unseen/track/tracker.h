@@ -358,6 +358,10 @@ class Tracker {
   // still the model's own, and anchor what the silhouette leaves open (a spin), which
   // colours from the frames would let drift; they are kept.
   bool dragged_at_start_ = false;
+  // Demoted because the light changed under the model's colours (LightChanged): they are
+  // still right in the object frame, only lit otherwise (LiveAppearanceOptions::
+  // replace_after_light_change).
+  bool demoted_by_light_ = false;
   // The model's own colours are not used (none, or the first frame found them misleading):
   // it takes them from the tracked frames (LiveAppearanceOptions).
   bool live_appearance_ = false;

@@ -28,6 +28,7 @@ void Tracker::StartWithGivenModel() {
   latest_live_.reset();
   photometric_demoted_ = false;
   dragged_at_start_ = false;
+  demoted_by_light_ = false;
   best_share_ = 0.0;
   poor_fit_frames_ = 0;
   model_ = given_model_;
@@ -36,6 +37,7 @@ void Tracker::StartWithGivenModel() {
 bool Tracker::ColoursNeverFitted(const TrackResult& r) {
   const LiveAppearanceOptions& lo = options_.live_appearance;
   if (lo.poor_fit_frames <= 0 || live_appearance_ || !use_photometric_ || dragged_at_start_ ||
+      (photometric_demoted_ && demoted_by_light_ && !lo.replace_after_light_change) ||
       !options_.region.enabled || model_ != given_model_) {
     return false;
   }

@@ -443,6 +443,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
         {"poor_fit_share", YamlField(&la.poor_fit_share)},
         {"poor_fit_frames", YamlField(&la.poor_fit_frames)},
         {"poor_fit_best_share", YamlField(&la.poor_fit_best_share)},
+        {"replace_after_light_change", YamlField(&la.replace_after_light_change)},
         {"poor_fit_confidence", YamlField(&la.poor_fit_confidence)}}},
       {"simplify",
        {{"enabled", YamlField(&si.enabled)},

@@ -103,6 +103,7 @@ TrackResult Tracker::Track(const Frame& input_frame) {
                     frame.frame_id, PhotometricFit(r.summary),
                     r.summary.counts.RejectionGathering());
     photometric_demoted_ = true;
+    demoted_by_light_ = true;
     align_again();
   }
   if (!search && !learn_from_start_ && status_ == TrackStatus::kTracking &&
