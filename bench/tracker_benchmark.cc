@@ -307,6 +307,15 @@ std::vector<Run> PlanRuns(const BenchArgs& args, const std::vector<std::string>&
       for (int threads : {1, 2}) {
         add({"dev", name, dir.string(), defaults, {}, threads, reference});
       }
+      // An RGB-D recording also without its depth (a colour camera alone): the real cube
+      // so tracked is the case the appearance-change rules must not lose.
+      if (Sequence::Open(dir.string()).has_depth()) {
+        TrackerOptions colour_only = defaults;
+        colour_only.depth.enabled = false;
+        add({"dev", name + " colour only", dir.string(), colour_only, {}, 1,
+             name == "visp_rbt_cube" ? "peer (region-based, colour only): 88 %, 11.7 mm, 3.2°"
+                                     : reference});
+      }
     }
   }
   // Sequences the tracker was not tuned on (--heldout folders).
