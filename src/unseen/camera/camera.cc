@@ -144,20 +144,27 @@ void Rig::Check() const {
   }
 }
 
-std::optional<PixelRect> PinholeCamera::PointsRect(
+std::optional<PinholeCamera::Bounds> PinholeCamera::ProjectedBounds(
     std::span<const Eigen::Vector3d> points_in_cam) const {
   if (points_in_cam.empty()) return std::nullopt;
-  double xl = std::numeric_limits<double>::infinity(), yl = xl;
-  double xh = -std::numeric_limits<double>::infinity(), yh = xh;
+  Bounds b{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+           std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
   for (const Eigen::Vector3d& p : points_in_cam) {
     if (!p.allFinite() || !(p.z() >= 1e-3)) return std::nullopt;
     const double x = fx * p.x() / p.z() + cx, y = fy * p.y() / p.z() + cy;
-    xl = std::min(xl, x);
-    xh = std::max(xh, x);
-    yl = std::min(yl, y);
-    yh = std::max(yh, y);
+    b.x_min = std::min(b.x_min, x);
+    b.x_max = std::max(b.x_max, x);
+    b.y_min = std::min(b.y_min, y);
+    b.y_max = std::max(b.y_max, y);
   }
-  return PixelsSpanned(xl, xh, yl, yh, width, height);
+  return b;
+}
+
+std::optional<PixelRect> PinholeCamera::PointsRect(
+    std::span<const Eigen::Vector3d> points_in_cam) const {
+  const std::optional<Bounds> b = ProjectedBounds(points_in_cam);
+  if (!b) return std::nullopt;
+  return PixelsSpanned(b->x_min, b->x_max, b->y_min, b->y_max, width, height);
 }
 
 }  // namespace unseen

@@ -77,6 +77,12 @@ struct PinholeCamera {
   // SphereRect's pixel convention. std::nullopt for no points, a point not in front of the
   // camera (z < 1 mm; the rectangle would be unbounded) or a rectangle outside the image.
   std::optional<PixelRect> PointsRect(std::span<const Eigen::Vector3d> points_in_cam) const;
+  // The same box of projections, not clipped to the image (image coordinates, pixel
+  // centres at integers): std::nullopt for no points or a point not in front of the camera.
+  struct Bounds {
+    double x_min, x_max, y_min, y_max;
+  };
+  std::optional<Bounds> ProjectedBounds(std::span<const Eigen::Vector3d> points_in_cam) const;
 };
 
 // One camera of a synchronized rig.

@@ -104,6 +104,23 @@ TEST(PinholeCamera, PointsRectBoundsTheProjectionsTightly) {
   EXPECT_FALSE(cam.PointsRect(aside).has_value());
 }
 
+TEST(PinholeCamera, ProjectedBoundsAreNotClippedToTheImage) {
+  const PinholeCamera cam = PinholeCamera::Centered(640, 480, 500.0);
+  // Points off to the side: their box lies right of the image, exactly where they project.
+  const std::vector<Eigen::Vector3d> aside = {Eigen::Vector3d(5, 0, 1), Eigen::Vector3d(6, 0.1, 2)};
+  const std::optional<PinholeCamera::Bounds> b = cam.ProjectedBounds(aside);
+  ASSERT_TRUE(b.has_value());
+  EXPECT_DOUBLE_EQ(b->x_min, cam.Project(aside[1]).x());
+  EXPECT_DOUBLE_EQ(b->x_max, cam.Project(aside[0]).x());
+  EXPECT_DOUBLE_EQ(b->y_min, cam.Project(aside[0]).y());
+  EXPECT_DOUBLE_EQ(b->y_max, cam.Project(aside[1]).y());
+  EXPECT_GT(b->x_min, cam.width);
+  // Behind the camera or not finite: unbounded; no points: nothing.
+  EXPECT_FALSE(cam.ProjectedBounds(std::vector<Eigen::Vector3d>{{0, 0, -0.5}}).has_value());
+  EXPECT_FALSE(cam.ProjectedBounds(std::vector<Eigen::Vector3d>{{std::nan(""), 0, 1}}).has_value());
+  EXPECT_FALSE(cam.ProjectedBounds({}).has_value());
+}
+
 TEST(PinholeCamera, CheckRejectsBadIntrinsics) {
   PinholeCamera c = ThesisCamera();
   EXPECT_NO_THROW(c.Check());

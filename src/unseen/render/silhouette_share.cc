@@ -2,8 +2,8 @@
 #include "unseen/render/silhouette_share.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
-#include <limits>
 
 #include "unseen/render/rasterizer.h"
 #include "unseen/util/error.h"
@@ -16,19 +16,14 @@ double SilhouetteShareInImage(const Mesh& mesh, const PinholeCamera& camera,
                               int max_side_px) {
   UNSEEN_CHECK(max_side_px >= 4, "SilhouetteShareInImage: max_side_px {} must be >= 4",
                max_side_px);
-  // The box's projection, not clipped to the image (pixel-centre coordinates).
-  double xl = std::numeric_limits<double>::infinity(), yl = xl;
-  double xh = -std::numeric_limits<double>::infinity(), yh = xh;
-  for (const Eigen::Vector3d& corner : box_corners_in_obj) {
-    const Eigen::Vector3d p = cam_from_obj * corner;
-    if (!p.allFinite() || !(p.z() >= 1e-3)) return 1.0;
-    const double x = camera.fx * p.x() / p.z() + camera.cx;
-    const double y = camera.fy * p.y() / p.z() + camera.cy;
-    xl = std::min(xl, x);
-    xh = std::max(xh, x);
-    yl = std::min(yl, y);
-    yh = std::max(yh, y);
+  // The box's projection, not clipped to the image.
+  std::array<Eigen::Vector3d, 8> corners_in_cam;
+  for (size_t i = 0; i < corners_in_cam.size(); ++i) {
+    corners_in_cam[i] = cam_from_obj * box_corners_in_obj[i];
   }
+  const std::optional<PinholeCamera::Bounds> bounds = camera.ProjectedBounds(corners_in_cam);
+  if (!bounds) return 1.0;
+  const double xl = bounds->x_min, xh = bounds->x_max, yl = bounds->y_min, yh = bounds->y_max;
   if (xl >= -0.5 && yl >= -0.5 && xh < camera.width - 0.5 && yh < camera.height - 0.5) {
     return 1.0;
   }
