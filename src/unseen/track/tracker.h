@@ -360,7 +360,8 @@ class Tracker {
   bool dragged_at_start_ = false;
   // Demoted because the light changed under the model's colours (LightChanged): they are
   // still right in the object frame, only lit otherwise (LiveAppearanceOptions::
-  // replace_after_light_change).
+  // replace_after_light_change). Set only with photometric_demoted_, which is lifted only
+  // with it (StartWithGivenModel) or once colours come from the frames.
   bool demoted_by_light_ = false;
   // The model's own colours are not used (none, or the first frame found them misleading):
   // it takes them from the tracked frames (LiveAppearanceOptions).

@@ -37,8 +37,8 @@ void Tracker::StartWithGivenModel() {
 bool Tracker::ColoursNeverFitted(const TrackResult& r) {
   const LiveAppearanceOptions& lo = options_.live_appearance;
   if (lo.poor_fit_frames <= 0 || live_appearance_ || !use_photometric_ || dragged_at_start_ ||
-      (photometric_demoted_ && demoted_by_light_ && !lo.replace_after_light_change) ||
-      !options_.region.enabled || model_ != given_model_) {
+      (demoted_by_light_ && !lo.replace_after_light_change) || !options_.region.enabled ||
+      model_ != given_model_) {
     return false;
   }
   if (r.status != TrackStatus::kTracking || r.confidence < lo.poor_fit_confidence ||
