@@ -11,6 +11,8 @@ namespace unseen {
 void LiveAppearanceOptions::Check() const {
   UNSEEN_CHECK(min_confidence >= 0.0 && min_confidence <= 1.0,
                "live_appearance.min_confidence {} must be in [0, 1]", min_confidence);
+  UNSEEN_CHECK(first_overrun_share >= 0.0 && first_overrun_share <= 1.0,
+               "live_appearance.first_overrun_share {} must be in [0, 1]", first_overrun_share);
   UNSEEN_CHECK(refresh_frames >= 1, "live_appearance.refresh_frames {} must be >= 1",
                refresh_frames);
   UNSEEN_CHECK(refresh_share_ratio >= 0.0 && refresh_share_ratio <= 1.0,

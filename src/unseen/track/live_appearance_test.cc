@@ -36,6 +36,19 @@ class LiveAppearance : public ::testing::Test {
   cv::Mat Image(const Rigid3d& world_from_obj) const {
     return testing::RenderOverBackground(textured_, rig_.cameras[0], world_from_obj, background_);
   }
+  // Papers `area` of the background with the cube's print, tiled at half its size: colours
+  // alike inside and around the silhouette.
+  void PaperWithPrint(const cv::Rect& area) {
+    cv::Mat print;
+    cv::resize(textured_.materials[0].texture, print, cv::Size(), 0.5, 0.5, cv::INTER_AREA);
+    for (int y = area.y; y < area.y + area.height; y += print.rows) {
+      for (int x = area.x; x < area.x + area.width; x += print.cols) {
+        const cv::Rect tile(x, y, std::min(print.cols, area.x + area.width - x),
+                            std::min(print.rows, area.y + area.height - y));
+        print(cv::Rect(0, 0, tile.width, tile.height)).copyTo(background_(tile));
+      }
+    }
+  }
   Rig rig_;
   Mesh textured_;
   cv::Mat background_;
@@ -117,16 +130,7 @@ TEST_F(LiveAppearance, AModelWhoseSilhouetteCannotConfirmTheGivenPoseTakesTheFra
   // print: the colours inside and around the silhouette are alike, and the silhouette alone
   // cannot confirm the given pose.
   const PinholeCamera& cam = rig_.cameras[0].intrinsics;
-  constexpr double kTile = 0.5;  // the print tiled at half its size
-  cv::Mat print;
-  cv::resize(textured_.materials[0].texture, print, cv::Size(), kTile, kTile, cv::INTER_AREA);
-  background_.create(cam.height, cam.width, CV_32FC3);
-  for (int y = 0; y < cam.height; y += print.rows) {
-    for (int x = 0; x < cam.width; x += print.cols) {
-      const cv::Rect tile(x, y, std::min(print.cols, cam.width - x), std::min(print.rows, cam.height - y));
-      print(cv::Rect(0, 0, tile.width, tile.height)).copyTo(background_(tile));
-    }
-  }
+  PaperWithPrint(cv::Rect(0, 0, cam.width, cam.height));
   auto run = [&](bool when_silhouette_fails, TrackResult* first) {
     TrackerOptions options;
     options.live_appearance.when_silhouette_fails = when_silhouette_fails;
@@ -164,6 +168,54 @@ TEST_F(LiveAppearance, AModelWhoseSilhouetteCannotConfirmTheGivenPoseTakesTheFra
   TrackerOptions parsed = ParseTrackerOptions("live_appearance: {when_silhouette_fails: false}");
   EXPECT_FALSE(parsed.live_appearance.when_silhouette_fails);
   EXPECT_THROW(ParseTrackerOptions("live_appearance: {when_silhouette_fails: 3}"), Error);
+}
+
+TEST_F(LiveAppearance, AModelWhoseLinesRunOnAtTheFirstFrameTakesTheFramesColours) {
+  // The wall is papered with the cube's print along the cube's left and upper-left sides:
+  // there the silhouette's lines run on past their end and are left out of its alignment,
+  // and the lines on the smooth side confirm the given pose by themselves (confidence 1),
+  // on too little of the object: the silhouette alone slides off towards the paper.
+  const PinholeCamera& cam = rig_.cameras[0].intrinsics;
+  const Eigen::Vector2d centre = cam.Project(CubePose().translation());
+  PaperWithPrint(cv::Rect(0, 0, static_cast<int>(centre.x()) - 40, cam.height));
+  PaperWithPrint(cv::Rect(0, 0, static_cast<int>(centre.x()), static_cast<int>(centre.y()) - 20));
+  auto run = [&](double first_overrun_share, TrackResult* first) {
+    TrackerOptions options;
+    options.live_appearance.first_overrun_share = first_overrun_share;
+    auto tracker = std::make_unique<Tracker>(rig_, testing::FlatCube(), options);
+    tracker->Initialize(CubePose());
+    *first = tracker->Track({Image(CubePose())});
+    return tracker;
+  };
+  TrackResult r;
+  std::unique_ptr<Tracker> by_silhouette = run(1.0, &r);  // the share never counts
+  EXPECT_FALSE(by_silhouette->photometric_in_use()) << r.BriefReport();
+  ASSERT_GE(r.confidence, TrackerOptions().live_appearance.min_confidence) << r.BriefReport();
+  const LiveAppearanceOptions defaults;
+  ASSERT_GT(r.summary.region_counts.OverrunShare(), defaults.first_overrun_share)
+      << r.BriefReport();
+  const double silhouette_error = Difference(r.world_from_obj, CubePose()).translation;
+  std::unique_ptr<Tracker> tracker = run(defaults.first_overrun_share, &r);
+  EXPECT_TRUE(tracker->photometric_in_use()) << r.BriefReport();
+  EXPECT_EQ(tracker->model().projectors.size(), 1u);
+  const double colours_error = Difference(r.world_from_obj, CubePose()).translation;
+  EXPECT_LT(colours_error, 0.003) << r.BriefReport();  // the silhouette alone: 18 mm
+  EXPECT_LT(colours_error, 0.5 * silhouette_error) << r.BriefReport();
+  // It follows the cube turning a degree a frame.
+  for (int k = 1; k <= 6; ++k) {
+    const Rigid3d truth = CubePose(k * kDeg);
+    r = tracker->Track({Image(truth)});
+    EXPECT_EQ(r.status, TrackStatus::kTracking) << k << ": " << r.BriefReport();
+    const PoseDifference e = Difference(r.world_from_obj, truth);
+    EXPECT_LT(e.translation, 0.003) << k << ": " << r.BriefReport();
+    EXPECT_LT(e.rotation_rad, 0.5 * kDeg) << k << ": " << r.BriefReport();
+  }
+  // Bad values and the YAML field.
+  EXPECT_EQ(ParseTrackerOptions("live_appearance: {first_overrun_share: 0.5}")
+                .live_appearance.first_overrun_share,
+            0.5);
+  EXPECT_THROW(ParseTrackerOptions("live_appearance: {first_overrun_share: 1.5}"), Error);
+  EXPECT_THROW(ParseTrackerOptions("live_appearance: {first_overrun_share: -0.1}"), Error);
 }
 
 TEST_F(LiveAppearance, AHeldTextureIsTakenAgainOnceItNoLongerFits) {

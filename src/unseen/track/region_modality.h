@@ -154,6 +154,8 @@ struct RegionCounts {
   double EdgeShare() const { return lines > 0 ? double(edge_lines) / double(lines) : -1.0; }
   // Share of agreeing pixels, or -1 with no line.
   double Agreement() const { return pixels > 0 ? double(agreeing) / double(pixels) : -1.0; }
+  // Share of lines that run on past their outer end, or -1 with no line.
+  double OverrunShare() const { return lines > 0 ? double(overrun) / double(lines) : -1.0; }
 };
 
 // One camera at one pyramid level; buffers of the size of `roi`.

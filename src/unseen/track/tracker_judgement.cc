@@ -218,8 +218,11 @@ TrackResult Tracker::AlignFirstFrameAt(const Frame& frame, const Rigid3d& given)
   const Learnt given_learnt = SaveLearnt();
   TrackResult r = AlignPredicted(frame, given);
   const LiveAppearanceOptions& lo = options_.live_appearance;
+  // Lines left out because they run on past their end do not count against the pose: many
+  // of them mean the rest confirm it on too little of the object.
+  const bool overruns = r.summary.region_counts.OverrunShare() > lo.first_overrun_share;
   if (!live_appearance_ && lo.when_silhouette_fails && MayTakeLiveAppearance() &&
-      r.confidence < lo.min_confidence) {
+      (r.confidence < lo.min_confidence || overruns)) {
     // The silhouette alone does not confirm the given pose (an object coloured like its
     // surroundings): the object as the first frame shows it there may.
     const Learnt silhouette_learnt = SaveLearnt();
@@ -228,11 +231,13 @@ TrackResult Tracker::AlignFirstFrameAt(const Frame& frame, const Rigid3d& given)
       live_appearance_ = true;
       TrackResult with_colours = AlignPredicted(frame, given);
       with_colours.summary.times += r.summary.times;
-      if (with_colours.confidence > r.confidence) {
-        UNSEEN_LOG_INFO("tracker: the silhouette alone does not confirm the given pose "
-                        "(confidence {:.2f}); the model takes its colours from the frames "
-                        "(confidence {:.2f})",
-                        r.confidence, with_colours.confidence);
+      if (with_colours.confidence > r.confidence ||
+          (overruns && with_colours.confidence >= r.confidence)) {
+        UNSEEN_LOG_INFO(
+            "tracker: the silhouette alone does not confirm the given pose "
+            "(confidence {:.2f}, {:.0f} % of its lines run on past their end); "
+            "the model takes its colours from the frames (confidence {:.2f})",
+            r.confidence, 100.0 * r.summary.region_counts.OverrunShare(), with_colours.confidence);
         return with_colours;
       }
       StartWithGivenModel();  // back to the model's own (no) colours

@@ -433,6 +433,7 @@ void Apply(const YAML::Node& root, const std::string& what, TrackerOptions* o) {
       {"live_appearance",
        {{"enabled", YamlField(&la.enabled)},
         {"when_silhouette_fails", YamlField(&la.when_silhouette_fails)},
+        {"first_overrun_share", YamlField(&la.first_overrun_share)},
         {"always", YamlField(&la.always)},
         {"min_confidence", YamlField(&la.min_confidence)},
         {"refresh_frames", YamlField(&la.refresh_frames)},
