@@ -36,6 +36,14 @@ class LiveAppearance : public ::testing::Test {
   cv::Mat Image(const Rigid3d& world_from_obj) const {
     return testing::RenderOverBackground(textured_, rig_.cameras[0], world_from_obj, background_);
   }
+  // A tracker of the flat (colourless) cube, started at CubePose() and given the first frame.
+  std::unique_ptr<Tracker> FlatCubeAtFirstFrame(const TrackerOptions& options,
+                                                TrackResult* first) const {
+    auto tracker = std::make_unique<Tracker>(rig_, testing::FlatCube(), options);
+    tracker->Initialize(CubePose());
+    *first = tracker->Track({Image(CubePose())});
+    return tracker;
+  }
   // Papers `area` of the background with the cube's print, tiled at half its size: colours
   // alike inside and around the silhouette.
   void PaperWithPrint(const cv::Rect& area) {
@@ -134,10 +142,7 @@ TEST_F(LiveAppearance, AModelWhoseSilhouetteCannotConfirmTheGivenPoseTakesTheFra
   auto run = [&](bool when_silhouette_fails, TrackResult* first) {
     TrackerOptions options;
     options.live_appearance.when_silhouette_fails = when_silhouette_fails;
-    auto tracker = std::make_unique<Tracker>(rig_, testing::FlatCube(), options);
-    tracker->Initialize(CubePose());
-    *first = tracker->Track({Image(CubePose())});
-    return tracker;
+    return FlatCubeAtFirstFrame(options, first);
   };
   TrackResult r;
   std::unique_ptr<Tracker> by_silhouette = run(false, &r);
@@ -182,10 +187,7 @@ TEST_F(LiveAppearance, AModelWhoseLinesRunOnAtTheFirstFrameTakesTheFramesColours
   auto run = [&](double first_overrun_share, TrackResult* first) {
     TrackerOptions options;
     options.live_appearance.first_overrun_share = first_overrun_share;
-    auto tracker = std::make_unique<Tracker>(rig_, testing::FlatCube(), options);
-    tracker->Initialize(CubePose());
-    *first = tracker->Track({Image(CubePose())});
-    return tracker;
+    return FlatCubeAtFirstFrame(options, first);
   };
   TrackResult r;
   std::unique_ptr<Tracker> by_silhouette = run(1.0, &r);  // the share never counts
