@@ -22,6 +22,7 @@
 #include "tools/unseen/known_object.h"
 #include "tools/unseen/unknown_object.h"
 #include "unseen/eval/overlay.h"
+#include "unseen/io/pose_stream.h"
 #include "unseen/io/sequence.h"
 #include "unseen/mesh/mesh_io.h"
 #include "unseen/model/model_updater.h"
@@ -73,29 +74,6 @@ std::vector<std::string> SplitComma(const std::string& text) {
     if (!item.empty()) out.push_back(item);
   }
   return out;
-}
-
-// "tx,ty,tz,qx,qy,qz,qw" (metres, world frame).
-Rigid3d ParsePose(const std::string& text) {
-  const std::vector<std::string> parts = SplitComma(text);
-  UNSEEN_CHECK(parts.size() == 7,
-               "track: --init '{}' must be 'gt' or seven numbers tx,ty,tz,qx,qy,qz,qw", text);
-  double v[7];
-  for (int i = 0; i < 7; ++i) {
-    try {
-      size_t used = 0;
-      v[i] = std::stod(parts[i], &used);
-      UNSEEN_CHECK(used == parts[i].size(), "trailing characters");
-    } catch (const std::exception&) {
-      ThrowError("track: --init value {} '{}' is not a number", i + 1, parts[i]);
-    }
-    UNSEEN_CHECK(std::isfinite(v[i]), "track: --init value {} '{}' is not finite", i + 1,
-                 parts[i]);
-  }
-  const Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
-  UNSEEN_CHECK(q.norm() > 1e-6, "track: --init quaternion ({}, {}, {}, {}) is zero", v[3], v[4],
-               v[5], v[6]);
-  return Rigid3d(q, Eigen::Vector3d(v[0], v[1], v[2]));
 }
 
 void RunTrack(const TrackArgs& args) {
@@ -185,7 +163,7 @@ void RunTrack(const TrackArgs& args) {
                  "its first frame", args.sequence);
     initial = *gt;
   } else if (!auto_init) {
-    initial = ParsePose(args.init);
+    initial = ParsePoseText(args.init, "track: --init (gt, auto or tx,ty,tz,qx,qy,qz,qw)");
   }
 
   TrackerOptions tracker_options = options;

@@ -205,6 +205,36 @@ TrackStatus ParseTrackStatus(const std::string& text, const std::string& what) {
   ThrowError("{}: unknown status \"{}\", expected tracking, lost or searching", what, text);
 }
 
+Rigid3d ParsePoseText(const std::string& text, const std::string& what) {
+  std::vector<std::string> parts;
+  for (size_t start = 0; start <= text.size();) {
+    const size_t end = std::min(text.find(',', start), text.size());
+    const size_t first = text.find_first_not_of(" \t\r\n", start);
+    const size_t last = text.find_last_not_of(" \t\r\n", end - 1);
+    parts.push_back(first < end && last != std::string::npos && last >= first
+                        ? text.substr(first, last - first + 1)
+                        : std::string());
+    start = end + 1;
+  }
+  UNSEEN_CHECK(parts.size() == 7, "{}: '{}' must be seven numbers tx,ty,tz,qx,qy,qz,qw", what,
+               text);
+  double v[7];
+  for (int i = 0; i < 7; ++i) {
+    size_t used = 0;
+    try {
+      v[i] = std::stod(parts[i], &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    UNSEEN_CHECK(used > 0 && used == parts[i].size() && std::isfinite(v[i]),
+                 "{}: value {} '{}' is not a finite number", what, i + 1, parts[i]);
+  }
+  const Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
+  UNSEEN_CHECK(q.norm() > 1e-6, "{}: quaternion ({}, {}, {}, {}) is zero", what, v[3], v[4], v[5],
+               v[6]);
+  return Rigid3d(q.normalized(), Eigen::Vector3d(v[0], v[1], v[2]));
+}
+
 PoseStreamWriter::PoseStreamWriter(const std::string& path) : path_(path) {
   const std::string ext = LowerExtension(path);
   UNSEEN_CHECK(ext == ".csv" || ext == ".jsonl" || ext == ".json",

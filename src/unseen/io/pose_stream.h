@@ -20,6 +20,10 @@ enum class TrackStatus { kTracking, kLost, kSearching };
 const char* ToString(TrackStatus status);  // "tracking", "lost", "searching"
 // Throws unseen::Error naming `what` for any other string.
 TrackStatus ParseTrackStatus(const std::string& text, const std::string& what = "status");
+// A pose written as seven comma-separated numbers "tx,ty,tz,qx,qy,qz,qw" (metres, a
+// quaternion of any non-zero norm, normalised), blanks around them allowed (a file's
+// trailing newline). Throws unseen::Error naming `what` and the offending value.
+Rigid3d ParsePoseText(const std::string& text, const std::string& what);
 
 struct PoseRecord {
   int frame = 0;

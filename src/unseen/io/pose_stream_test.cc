@@ -154,6 +154,27 @@ TEST(PoseStream, RejectsNonUnitQuaternion) {
   ExpectError([&] { ReadPoseStream(path.string()); }, {"q.csv:2", "quaternion", "1.01"});
 }
 
+TEST(PoseStream, PoseTextParsedOrRejectedByName) {
+  // A file's line, blanks and trailing newline included; the quaternion is normalised.
+  const Rigid3d pose = ParsePoseText(" 0.1, -0.2,0.5, 0,0,0.6,0.8\n", "init_pose.txt");
+  EXPECT_TRUE(pose.translation().isApprox(Eigen::Vector3d(0.1, -0.2, 0.5)));
+  EXPECT_NEAR(pose.rotation().z(), 0.6, 1e-12);
+  EXPECT_NEAR(pose.rotation().w(), 0.8, 1e-12);
+  EXPECT_TRUE(
+      ParsePoseText("0,0,0,0,0,0,2", "p").rotation().isApprox(Eigen::Quaterniond::Identity()));
+  auto rejects = [](const std::string& text, const std::string& says) {
+    ExpectError([&] { ParsePoseText(text, "init_pose.txt"); }, {"init_pose.txt", says});
+  };
+  rejects("0,0,0,0,0,0", "seven numbers");
+  rejects("0,0,0,0,0,0,1,0", "seven numbers");
+  rejects("0,0,x,0,0,0,1", "value 3 'x'");
+  rejects("0,0,1m,0,0,0,1", "value 3 '1m'");
+  rejects("0,,0,0,0,0,1", "value 2 ''");
+  rejects("0,0,0,0,0,nan,1", "value 6 'nan'");
+  rejects("0,0,0,0,0,0,0", "quaternion");
+  rejects("", "seven numbers");
+}
+
 TEST(PoseStream, RejectsUnknownStatus) {
   const fs::path path = TestDir() / "s.csv";
   WriteText(path, std::string(kHeader) + "0,0,Tracked,1,0,0,1,0,0,0,1\n");
