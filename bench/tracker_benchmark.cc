@@ -7,11 +7,13 @@
 // and without rejection (3.4), side light with and without LINF (3.2), and model size; and
 // each development sequence with one modality at a time (photometric, silhouette, depth)
 // against all of them; and every development and held-out sequence started from a first
-// pose off the ground truth (the "start" group).
+// pose off the ground truth (the "start" group); and recordings without ground truth from
+// the first pose their init_pose.txt gives (the "real" group: frames tracked and lost).
 // Prints a table per group and writes every row to a JSON file.
 //
 //   tracker_benchmark [--data DIR] [--scenes DIR] [--work DIR] [--json FILE]
 //                     [--groups dev,synthetic,...] [--max-frames N] [--config tracker.yaml]
+//                     [--heldout DIRS] [--real DIRS]
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
@@ -32,6 +34,7 @@
 #include "unseen/eval/evaluation.h"
 #include "unseen/eval/sequence_poses.h"
 #include "unseen/geometry/rigid3.h"
+#include "unseen/io/pose_stream.h"
 #include "unseen/io/sequence.h"
 #include "unseen/mesh/primitives.h"
 #include "unseen/select/known_model_pose.h"
@@ -58,8 +61,12 @@ struct BenchArgs {
   // Folders of sequences kept out of the repository (renders of other objects, lights,
   // cameras; other recordings), comma-separated; default $UNSEEN_HELDOUT_SEQUENCES.
   std::string heldout_dirs;
+  // Folders of recordings without ground truth, each sequence with its first pose in
+  // init_pose.txt (tx,ty,tz,qx,qy,qz,qw), comma-separated; default $UNSEEN_REAL_SEQUENCES.
+  std::string real_dirs;
   std::string groups =
-      "dev,heldout,start,modalities,synthetic,color,scale,speed,occlusion,linf,model_size,budget";
+      "dev,heldout,start,real,modalities,synthetic,color,scale,speed,occlusion,linf,model_size,"
+      "budget";
   int max_frames = 0;  // 0 = all
   // Tracker options (YAML) every run starts from instead of the defaults, so that a
   // setting can be compared across all groups; empty: the defaults.
@@ -81,7 +88,18 @@ struct Run {
   double start_offset_m = 0.0;
   double start_turn_deg = 0.0;
   unsigned start_seed = 0;
+  // The first pose's file (the "real" group); the run is then scored by the frames it
+  // tracked, whether or not the sequence has ground truth.
+  std::string init_pose_path = "";
 };
+
+// The pose `path` holds (one line tx,ty,tz,qx,qy,qz,qw, metres, world frame).
+Rigid3d ReadPoseFile(const std::string& path) {
+  std::ifstream in(path);
+  UNSEEN_CHECK(in.good(), "{}: cannot read the first pose", path);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return ParsePoseText(text, path);
+}
 
 // `truth` moved `offset_m` along a random direction and turned `turn_deg` about a random
 // axis through the model's origin (world frame), both drawn from `seed`.
@@ -95,7 +113,10 @@ Rigid3d OffStart(const Rigid3d& truth, double offset_m, double turn_deg, unsigne
 }
 
 struct RunOutcome {
+  // Without ground truth (the "real" group) only its frame counts are filled: frames,
+  // scored_frames (returned tracking) and lost_frames.
   EvaluationResult eval;
+  bool has_truth = true;
   int frames = 0;
   double fps = 0.0;        // frames / seconds spent in Tracker::Track
   StageTimes mean_times;   // mean per frame
@@ -122,8 +143,9 @@ double Median(std::vector<double> values) {
 RunOutcome Execute(const Run& run, int max_frames) {
   cv::setNumThreads(run.threads);
   const Sequence sequence = Sequence::Open(run.sequence_dir);
-  UNSEEN_CHECK(sequence.has_ground_truth(), "{}: the benchmark needs ground truth",
-               run.sequence_dir);
+  const bool scored_by_truth = run.init_pose_path.empty();
+  UNSEEN_CHECK(!scored_by_truth || sequence.has_ground_truth(),
+               "{}: the benchmark needs ground truth or init_pose.txt", run.sequence_dir);
   Mesh model = run.model ? run.model(sequence) : sequence.LoadModel();
   TrackerOptions options = run.options;
   options.threads = run.threads;
@@ -133,7 +155,8 @@ RunOutcome Execute(const Run& run, int max_frames) {
   Tracker tracker(sequence.rig(), std::move(model), options);
   // As `unseen track` with a model file: a lost object is also tried in its views' turns.
   tracker.SetPoseProposer(ViewBankProposer(&tracker));
-  const auto start = sequence.GroundTruth(0);
+  const std::optional<Rigid3d> start =
+      scored_by_truth ? sequence.GroundTruth(0) : ReadPoseFile(run.init_pose_path);
   UNSEEN_CHECK(start.has_value(), "{}: frame 0 has no ground truth", run.sequence_dir);
   const bool off = run.start_offset_m > 0.0 || run.start_turn_deg > 0.0;
   const Rigid3d first =
@@ -175,9 +198,17 @@ RunOutcome Execute(const Run& run, int max_frames) {
   out.median_search_ms = Median(search_ms);
   out.search_frames = static_cast<int>(search_ms.size());
   const std::vector<PoseRecord>& poses = summary.records;
-  std::vector<GroundTruthFrame> truth = SequenceGroundTruth(sequence);
-  truth.resize(std::min<size_t>(truth.size(), n));
-  out.eval = Evaluate(truth, poses);
+  if (scored_by_truth) {
+    std::vector<GroundTruthFrame> truth = SequenceGroundTruth(sequence);
+    truth.resize(std::min<size_t>(truth.size(), n));
+    out.eval = Evaluate(truth, poses);
+  } else {
+    out.has_truth = false;
+    out.eval.frames = static_cast<int>(poses.size());
+    for (const PoseRecord& p : poses) {
+      (p.status == TrackStatus::kTracking ? out.eval.scored_frames : out.eval.lost_frames)++;
+    }
+  }
   out.frames = n;
   out.fps = summary.fps();
   const double k = n > 0 ? 1.0 / n : 0.0;
@@ -198,6 +229,17 @@ RunOutcome Execute(const Run& run, int max_frames) {
 
 nlohmann::json ToJson(const Run& run, const RunOutcome& o) {
   nlohmann::json j = o.eval.ToJson();
+  if (!o.has_truth) {
+    // Nothing to score the poses against: the frames returned tracking and lost only.
+    for (auto& [key, value] : j.items()) {
+      if (key.find("_err_") != std::string::npos || key.rfind("success_", 0) == 0 ||
+          key == "first_failure_frame") {
+        value = nullptr;
+      }
+    }
+    j["ground_truth"] = false;
+    j["init_pose"] = run.init_pose_path;
+  }
   j["group"] = run.group;
   j["name"] = run.name;
   j["sequence"] = fs::path(run.sequence_dir).filename().string();
@@ -230,19 +272,21 @@ nlohmann::json ToJson(const Run& run, const RunOutcome& o) {
 
 std::string Row(const Run& run, const RunOutcome& o) {
   const EvaluationResult& e = o.eval;
-  const bool any = e.scored_frames > 0;
+  const bool any = o.has_truth && e.scored_frames > 0;
+  auto percent = [&](double share) {
+    return o.has_truth ? fmt::format("{:.1f}%", 100.0 * share) : std::string("-");
+  };
   return fmt::format(
-      "{:<34} {:>2} {:>5.1f}% {:>5.1f}% {:>4} {:>7} {:>7} {:>7} {:>6} {:>6} {:>7.0f} {:>5.2f} "
+      "{:<34} {:>2} {:>6} {:>6} {:>4} {:>7} {:>7} {:>7} {:>6} {:>6} {:>7.0f} {:>5.2f} "
       "{:>4.1f} {:>5.2f} {:>5.2f} {:>5.2f}  {}",
-      run.name, run.threads, 100.0 * e.success_rate, 100.0 * e.strict_success_rate,
-      e.lost_frames,
+      run.name, run.threads, percent(e.success_rate), percent(e.strict_success_rate), e.lost_frames,
       any ? fmt::format("{:.2f}", e.trans_err_mm.mean) : "-",
       any ? fmt::format("{:.2f}", e.trans_err_mm.rms) : "-",
       any ? fmt::format("{:.1f}", e.trans_err_mm.max) : "-",
       any ? fmt::format("{:.2f}", e.rot_err_deg.mean) : "-",
       any ? fmt::format("{:.2f}", e.rot_err_deg.max) : "-", o.fps, o.cpu_ms, o.mean_renders,
-      o.mean_times.render_ms,
-      o.mean_times.preprocess_ms + o.mean_times.select_ms, o.mean_times.solve_ms, run.thesis);
+      o.mean_times.render_ms, o.mean_times.preprocess_ms + o.mean_times.select_ms,
+      o.mean_times.solve_ms, run.thesis);
 }
 
 std::string Header() {
@@ -277,6 +321,25 @@ std::vector<fs::path> DevSequences(const std::string& data_dir) {
     }
   }
   std::sort(dirs.begin(), dirs.end());
+  return dirs;
+}
+
+// The sequence folders inside the comma-separated folders of `list` (default: the
+// environment variable `env`), each folder's sorted; a folder not found is skipped.
+std::vector<fs::path> SequenceFolders(std::string list, const char* env) {
+  if (list.empty() && std::getenv(env)) list = std::getenv(env);
+  std::vector<fs::path> dirs;
+  for (size_t start = 0; start < list.size();) {
+    const size_t end = std::min(list.find(',', start), list.size());
+    const fs::path folder = list.substr(start, end - start);
+    start = end + 1;
+    if (folder.empty()) continue;
+    if (!IsFolder(folder)) {
+      UNSEEN_LOG_WARN("sequence folder {} not found: skipped", folder.string());
+      continue;
+    }
+    for (const fs::path& dir : DevSequences(folder.string())) dirs.push_back(dir);
+  }
   return dirs;
 }
 
@@ -320,28 +383,27 @@ std::vector<Run> PlanRuns(const BenchArgs& args, const std::vector<std::string>&
   }
   // Sequences the tracker was not tuned on (--heldout folders).
   auto heldout_sequences = [&]() {
-    std::vector<fs::path> dirs;
-    std::string list = args.heldout_dirs;
-    if (list.empty() && std::getenv("UNSEEN_HELDOUT_SEQUENCES")) {
-      list = std::getenv("UNSEEN_HELDOUT_SEQUENCES");
-    }
-    for (size_t start = 0; start < list.size();) {
-      const size_t end = std::min(list.find(',', start), list.size());
-      const fs::path folder = list.substr(start, end - start);
-      start = end + 1;
-      if (folder.empty()) continue;
-      if (!IsFolder(folder)) {
-        UNSEEN_LOG_WARN("held-out folder {} not found: skipped", folder.string());
-        continue;
-      }
-      for (const fs::path& dir : DevSequences(folder.string())) dirs.push_back(dir);
-    }
-    return dirs;
+    return SequenceFolders(args.heldout_dirs, "UNSEEN_HELDOUT_SEQUENCES");
   };
   if (wanted("heldout")) {
     // Defaults, one thread, from the true first pose.
     for (const fs::path& dir : heldout_sequences()) {
       add({"heldout", dir.filename().string(), dir.string(), defaults, {}, 1, ""});
+    }
+  }
+  if (wanted("real")) {
+    // Recordings without ground truth, from the first pose their init_pose.txt gives,
+    // defaults, one thread: tracked and lost frames (ViSP's real footage,
+    // bench/heldout/visp_*.py).
+    for (const fs::path& dir : SequenceFolders(args.real_dirs, "UNSEEN_REAL_SEQUENCES")) {
+      const fs::path init = dir / "init_pose.txt";
+      if (!IsFile(init)) {
+        UNSEEN_LOG_WARN("{}: no init_pose.txt: skipped by the real group", dir.string());
+        continue;
+      }
+      Run run{"real", dir.filename().string(), dir.string(), defaults, {}, 1, ""};
+      run.init_pose_path = init.string();
+      add(std::move(run));
     }
   }
   if (wanted("start")) {
@@ -485,8 +547,12 @@ int Main(int argc, char** argv) {
   app.add_option("--heldout", args.heldout_dirs,
                  "Comma-separated folders of held-out sequences (default: "
                  "$UNSEEN_HELDOUT_SEQUENCES); the heldout group runs each sequence in them");
+  app.add_option("--real", args.real_dirs,
+                 "Comma-separated folders of recordings without ground truth, each sequence "
+                 "with its first pose in init_pose.txt (default: $UNSEEN_REAL_SEQUENCES); the "
+                 "real group tracks each and counts the frames tracked and lost");
   app.add_option("--groups", args.groups,
-                 "Comma-separated: dev,heldout,start,modalities,synthetic,color,scale,speed,"
+                 "Comma-separated: dev,heldout,start,real,modalities,synthetic,color,scale,speed,"
                  "occlusion,linf,model_size,budget (start: every development and held-out "
                  "sequence from a first pose 8 mm and 4 degrees off, three draws)");
   app.add_option("--max-frames", args.max_frames, "Track at most N frames per run (0 = all)");
