@@ -189,11 +189,11 @@ def build_mesh(cao_path):
     return V, np.array(tris, int), info, m['ignored']
 
 
-def write_ply(path, V_mm, F):
+def write_ply(path, V_mm, F, comment='ViSP chateau.cao (mbt-depth/castel), object frame kept, mm'):
     with open(path, 'w') as f:
-        f.write('ply\nformat ascii 1.0\ncomment ViSP chateau.cao (mbt-depth/castel), object frame kept, mm\n'
+        f.write('ply\nformat ascii 1.0\ncomment %s\n'
                 'element vertex %d\nproperty float x\nproperty float y\nproperty float z\n'
-                'element face %d\nproperty list uchar int vertex_indices\nend_header\n' % (len(V_mm), len(F)))
+                'element face %d\nproperty list uchar int vertex_indices\nend_header\n' % (comment, len(V_mm), len(F)))
         for p in V_mm:
             f.write('%.3f %.3f %.3f\n' % tuple(p))
         for t in F:
@@ -216,9 +216,9 @@ def deproject(raw, Kd, scale=DEPTH_SCALE_M, coeffs=DEPTH_COEFFS):
     return np.stack([x * z, y * z, z], 1)
 
 
-def register_depth(raw, Kd, Kc, depth_M_color, shape, coeffs=DEPTH_COEFFS, fill=True):
+def register_depth(raw, Kd, Kc, depth_M_color, shape, coeffs=DEPTH_COEFFS, fill=True, scale=DEPTH_SCALE_M):
     """Depth image of the colour camera (uint16 mm, 0 = unknown)."""
-    Xd = deproject(raw, Kd, coeffs=coeffs)
+    Xd = deproject(raw, Kd, scale=scale, coeffs=coeffs)
     color_M_depth = np.linalg.inv(depth_M_color)
     Xc = Xd @ color_M_depth[:3, :3].T + color_M_depth[:3, 3]
     fx, fy, cx, cy = Kc
