@@ -2,6 +2,7 @@
 #include "unseen/track/live_appearance.h"
 
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 
 #include "unseen/render/rasterizer.h"
 #include "unseen/util/error.h"
@@ -13,6 +14,12 @@ void LiveAppearanceOptions::Check() const {
                "live_appearance.min_confidence {} must be in [0, 1]", min_confidence);
   UNSEEN_CHECK(first_overrun_share >= 0.0 && first_overrun_share <= 1.0,
                "live_appearance.first_overrun_share {} must be in [0, 1]", first_overrun_share);
+  UNSEEN_CHECK(print_share >= 0.0 && std::isfinite(print_share),
+               "live_appearance.print_share {} must be >= 0 (> 1: never)", print_share);
+  UNSEEN_CHECK(print_min_gradient > 0.0 && print_min_gradient <= 1.0,
+               "live_appearance.print_min_gradient {} must be in (0, 1]", print_min_gradient);
+  UNSEEN_CHECK(print_inset_px >= 0 && print_inset_px <= 32,
+               "live_appearance.print_inset_px {} must be in [0, 32]", print_inset_px);
   UNSEEN_CHECK(refresh_frames >= 1, "live_appearance.refresh_frames {} must be >= 1",
                refresh_frames);
   UNSEEN_CHECK(refresh_share_ratio >= 0.0 && refresh_share_ratio <= 1.0,
@@ -59,6 +66,33 @@ std::optional<Projector> CaptureProjector(const Mesh& model, const PinholeCamera
   p.camera.distortion.clear();  // the frame's distortion was removed at input
   p.cam_from_obj = cam_from_obj;
   return p;
+}
+
+double TexturedShare(const Projector& p, double min_gradient, int inset_px) {
+  if (p.image.empty() || p.depth.empty()) return -1.0;
+  cv::Mat inside = p.depth > 0.0f;
+  if (inset_px > 0) {
+    cv::erode(
+        inside, inside,
+        cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * inset_px + 1, 2 * inset_px + 1)));
+  }
+  cv::Mat grey;
+  cv::cvtColor(p.image, grey, cv::COLOR_BGR2GRAY);
+  long object = 0, textured = 0;
+  const float limit = static_cast<float>(4.0 * min_gradient * min_gradient);
+  for (int y = 1; y + 1 < grey.rows; ++y) {
+    const uint8_t* in = inside.ptr<uint8_t>(y);
+    const float* g = grey.ptr<float>(y);
+    const float* up = grey.ptr<float>(y - 1);
+    const float* down = grey.ptr<float>(y + 1);
+    for (int x = 1; x + 1 < grey.cols; ++x) {
+      if (!in[x]) continue;
+      ++object;
+      const float gx = g[x + 1] - g[x - 1], gy = down[x] - up[x];  // twice the gradient
+      textured += gx * gx + gy * gy > limit;
+    }
+  }
+  return object > 0 ? double(textured) / double(object) : -1.0;
 }
 
 }  // namespace unseen

@@ -36,6 +36,11 @@ class LiveAppearance : public ::testing::Test {
   cv::Mat Image(const Rigid3d& world_from_obj) const {
     return testing::RenderOverBackground(textured_, rig_.cameras[0], world_from_obj, background_);
   }
+  // The flat (colourless) cube itself, shaded, over the background: no print.
+  cv::Mat PlainImage(const Rigid3d& world_from_obj) const {
+    return testing::RenderOverBackground(testing::FlatCube(), rig_.cameras[0], world_from_obj,
+                                         background_);
+  }
   // A tracker of the flat (colourless) cube, started at CubePose() and given the first frame.
   std::unique_ptr<Tracker> FlatCubeAtFirstFrame(const TrackerOptions& options,
                                                 TrackResult* first) const {
@@ -124,13 +129,63 @@ TEST_F(LiveAppearance, AModelWithoutColoursTakesThemFromTheTrackedFrames) {
   tracker.Initialize(CubePose());
   EXPECT_FALSE(tracker.photometric_in_use());
   EXPECT_TRUE(tracker.model().projectors.empty());
-  // Off (the default), the flat model stays on its silhouette.
+  // Off (the default), the flat model of a plain cube (no print to take) stays on its
+  // silhouette.
   Tracker plain(rig_, testing::FlatCube());
   plain.Initialize(CubePose());
-  plain.Track({Image(CubePose())});
-  r = plain.Track({Image(CubePose(kDeg))});
+  plain.Track({PlainImage(CubePose())});
+  r = plain.Track({PlainImage(CubePose(kDeg))});
   EXPECT_FALSE(plain.photometric_in_use());
   EXPECT_EQ(r.summary.counts.used, 0);
+}
+
+TEST_F(LiveAppearance, AModelWithoutColoursOfAPrintedObjectTakesThemFromItsFirstFrame) {
+  // The bare cube given for the lettered one: its first frame shows the print, and the model
+  // takes its colours from the frames although live_appearance.enabled is off.
+  auto run = [&](double print_share) {
+    TrackerOptions options;
+    options.live_appearance.print_share = print_share;
+    TrackResult first;
+    std::unique_ptr<Tracker> tracker = FlatCubeAtFirstFrame(options, &first);
+    EXPECT_EQ(first.status, TrackStatus::kTracking) << first.BriefReport();
+    return tracker;
+  };
+  ASSERT_FALSE(TrackerOptions().live_appearance.enabled);
+  std::unique_ptr<Tracker> tracker = run(TrackerOptions().live_appearance.print_share);
+  EXPECT_TRUE(tracker->photometric_in_use());
+  EXPECT_EQ(tracker->model().projectors.size(), 1u);
+  for (int k = 1; k <= 6; ++k) {
+    const Rigid3d truth = CubePose(k * kDeg);
+    const TrackResult r = tracker->Track({Image(truth)});
+    EXPECT_EQ(r.status, TrackStatus::kTracking) << k << ": " << r.BriefReport();
+    EXPECT_GT(r.summary.counts.used, 1000) << k << ": " << r.BriefReport();
+    const PoseDifference e = Difference(r.world_from_obj, truth);
+    EXPECT_LT(e.translation, 0.004) << k << ": " << r.BriefReport();
+    EXPECT_LT(e.rotation_rad, 0.5 * kDeg) << k << ": " << r.BriefReport();
+  }
+  // The rule off (print_share above 1), the model stays on its silhouette.
+  EXPECT_FALSE(run(2.0)->photometric_in_use());
+  // The print's share: the lettered cube's faces against the plain cube's.
+  const PinholeCamera& cam = rig_.cameras[0].intrinsics;
+  const PixelRect rect = cam.ImageRect();
+  const LiveAppearanceOptions lo;
+  auto share = [&](const cv::Mat& image) {
+    const std::optional<Projector> p =
+        CaptureProjector(testing::FlatCube(), cam, CubePose(), image, rect, 0.003f);
+    EXPECT_TRUE(p.has_value());
+    return p ? TexturedShare(*p, lo.print_min_gradient, lo.print_inset_px) : -1.0;
+  };
+  EXPECT_GE(share(Image(CubePose())), lo.print_share);
+  EXPECT_LT(share(PlainImage(CubePose())), 0.25 * lo.print_share);
+  // Bad values and the YAML fields.
+  const TrackerOptions parsed = ParseTrackerOptions(
+      "live_appearance: {print_share: 0.3, print_min_gradient: 0.1, print_inset_px: 2}");
+  EXPECT_EQ(parsed.live_appearance.print_share, 0.3);
+  EXPECT_EQ(parsed.live_appearance.print_min_gradient, 0.1);
+  EXPECT_EQ(parsed.live_appearance.print_inset_px, 2);
+  EXPECT_THROW(ParseTrackerOptions("live_appearance: {print_share: -0.1}"), Error);
+  EXPECT_THROW(ParseTrackerOptions("live_appearance: {print_min_gradient: 0}"), Error);
+  EXPECT_THROW(ParseTrackerOptions("live_appearance: {print_inset_px: -1}"), Error);
 }
 
 TEST_F(LiveAppearance, AModelWhoseSilhouetteCannotConfirmTheGivenPoseTakesTheFramesColours) {
@@ -142,6 +197,7 @@ TEST_F(LiveAppearance, AModelWhoseSilhouetteCannotConfirmTheGivenPoseTakesTheFra
   auto run = [&](bool when_silhouette_fails, TrackResult* first) {
     TrackerOptions options;
     options.live_appearance.when_silhouette_fails = when_silhouette_fails;
+    options.live_appearance.print_share = 2.0;  // the print rule aside (below)
     return FlatCubeAtFirstFrame(options, first);
   };
   TrackResult r;
@@ -187,6 +243,7 @@ TEST_F(LiveAppearance, AModelWhoseLinesRunOnAtTheFirstFrameTakesTheFramesColours
   auto run = [&](double first_overrun_share, TrackResult* first) {
     TrackerOptions options;
     options.live_appearance.first_overrun_share = first_overrun_share;
+    options.live_appearance.print_share = 2.0;  // the print rule aside (below)
     return FlatCubeAtFirstFrame(options, first);
   };
   TrackResult r;

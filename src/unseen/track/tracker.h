@@ -336,6 +336,9 @@ class Tracker {
   // The model has no colours of its own, and the silhouette could judge colours taken from
   // the frames (LiveAppearanceOptions).
   bool MayTakeLiveAppearance() const;
+  // A model without colours whose first frame, confidently tracked, shows a print over
+  // LiveAppearanceOptions::print_share of its surface.
+  bool ShowsAPrint(const Frame& frame, const TrackResult& r) const;
   // After a tracked frame: whether the model's own colours have fitted so poorly for so
   // long that it should take them from the frames (LiveAppearanceOptions::poor_fit_share).
   bool ColoursNeverFitted(const TrackResult& r);

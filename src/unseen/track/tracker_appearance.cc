@@ -89,6 +89,26 @@ void Tracker::UpdateLiveAppearance(const Frame& frame, const TrackResult& r) {
   }
 }
 
+bool Tracker::ShowsAPrint(const Frame& frame, const TrackResult& r) const {
+  const LiveAppearanceOptions& lo = options_.live_appearance;
+  if (live_appearance_ || lo.print_share > 1.0 || !MayTakeLiveAppearance() ||
+      r.status != TrackStatus::kTracking || r.confidence < lo.min_confidence) {
+    return false;
+  }
+  const std::shared_ptr<const Mesh> seen = CaptureLiveAppearance(frame, r.world_from_obj);
+  if (!seen) return false;
+  double share = -1.0;
+  for (const Projector& p : seen->projectors) {
+    share = std::max(share, TexturedShare(p, lo.print_min_gradient, lo.print_inset_px));
+  }
+  if (share < lo.print_share) return false;
+  UNSEEN_LOG_INFO(
+      "tracker: the model has no colours but the first frame shows a print on {:.0f} % "
+      "of it; it takes its colours from the tracked frames",
+      100.0 * share);
+  return true;
+}
+
 std::shared_ptr<const Mesh> Tracker::CaptureLiveAppearance(const Frame& frame,
                                                            const Rigid3d& world_from_obj) const {
   const LiveAppearanceOptions& lo = options_.live_appearance;

@@ -253,6 +253,7 @@ TrackResult Tracker::Track(const Frame& input_frame) {
                     frame.frame_id, r.summary.share, best_share_);
     live_appearance_ = true;
   }
+  if (first_frame && ShowsAPrint(frame, r)) live_appearance_ = true;
   UpdateLiveAppearance(frame, r);
   r.summary.times.predict_ms = predict_ms;
   r.summary.times.total_ms = total.ElapsedMilliseconds();
