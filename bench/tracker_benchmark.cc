@@ -23,6 +23,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <opencv2/core/utility.hpp>
 #include <optional>
@@ -145,7 +146,8 @@ RunOutcome Execute(const Run& run, int max_frames) {
   const Sequence sequence = Sequence::Open(run.sequence_dir);
   const bool scored_by_truth = run.init_pose_path.empty();
   UNSEEN_CHECK(!scored_by_truth || sequence.has_ground_truth(),
-               "{}: the benchmark needs ground truth or init_pose.txt", run.sequence_dir);
+               "{}: the {} group needs ground truth (recordings without it: --real)",
+               run.sequence_dir, run.group);
   Mesh model = run.model ? run.model(sequence) : sequence.LoadModel();
   TrackerOptions options = run.options;
   options.threads = run.threads;
@@ -232,8 +234,8 @@ nlohmann::json ToJson(const Run& run, const RunOutcome& o) {
   if (!o.has_truth) {
     // Nothing to score the poses against: the frames returned tracking and lost only.
     for (auto& [key, value] : j.items()) {
-      if (key.find("_err_") != std::string::npos || key.rfind("success_", 0) == 0 ||
-          key == "first_failure_frame") {
+      if (key.find("_err_") != std::string::npos || key == "success_5cm5deg" ||
+          key == "success_2cm2deg" || key == "first_failure_frame") {
         value = nullptr;
       }
     }

@@ -57,8 +57,10 @@ def frame_numbers(src):
 
 def read_cmo(src, num):
     T = np.loadtxt(os.path.join(src, 'CameraPose', 'Camera_%03d.txt' % num))
-    assert T.shape == (4, 4) and np.allclose(T[3], [0, 0, 0, 1]), num
-    assert np.allclose(T[:3, :3] @ T[:3, :3].T, np.eye(3), atol=1e-5), num
+    if T.shape != (4, 4) or not np.allclose(T[3], [0, 0, 0, 1]):
+        sys.exit('CameraPose/Camera_%03d.txt: not a 4x4 rigid transform' % num)
+    if not np.allclose(T[:3, :3] @ T[:3, :3].T, np.eye(3), atol=1e-5):
+        sys.exit('CameraPose/Camera_%03d.txt: the rotation is not orthonormal' % num)
     return T
 
 

@@ -38,8 +38,10 @@ struct LiveAppearanceOptions {
   // (the first frame aligned by it below min_confidence: an object coloured like its
   // surroundings, a white cube on white paper) takes its colours from the frames, whatever
   // `enabled` says, starting with the first frame's seen from the given pose, when that
-  // aligns the first frame more confidently. Real footage with untextured models: a printed
-  // cube on white paper 4 -> 218 of 218 frames tracked, a castle with depth 1 -> 30 of 30.
+  // aligns the first frame more confidently (or when too many of its lines ran on:
+  // first_overrun_share). Real footage with untextured models: a printed cube on white paper
+  // 4 -> 212 of 218 frames tracked (218 with first_overrun_share), a castle with depth 1 -> 30
+  // of 30.
   bool when_silhouette_fails = true;
   // With when_silhouette_fails: the silhouette alone does not confirm the given pose either
   // when more than this share of the first frame's contour lines run on past their end
@@ -47,7 +49,8 @@ struct LiveAppearanceOptions {
   // the object the image is coloured like it, and the lines left confirm too little (a
   // printed cube on white paper, 0.29 of its lines: by its silhouette alone confidence 1.00
   // on the rest, lost at frame 211 of 218; with the frames' colours 218 of 218). The
-  // frame's colours are then kept unless they align it less confidently. The renders of
+  // frame's colours are then kept unless they align it less confidently (or below
+  // min_confidence). Only while those lines are left out (skip_overrun_lines). The renders of
   // the tracker benchmark's first frames reach at most 0.08. 1: never.
   double first_overrun_share = 0.2;
   // A model without colours of its own takes them from the frames, whatever `enabled`
@@ -58,8 +61,12 @@ struct LiveAppearanceOptions {
   // 91 -> 100 %, while the untextured objects the frames' colours mislead stay on their
   // silhouette: a matte teapot (0.04) fell 100 -> 8 %, a low-contrast mug's starts to 5 %
   // with them (the glossy figure, 0.08, would have gained). > 1: never.
+  // With several cameras, the largest share any of them sees. Not after the first frame's
+  // colours aligned it less confidently than its silhouette (when_silhouette_fails).
   double print_share = 0.12;
+  // Grey-level change per pixel, of [0, 1], that counts as print (20 of 255 levels).
   double print_min_gradient = 0.08;
+  // Pixels this close to the outline are not judged (the silhouette's own edge).
   int print_inset_px = 3;
   // A texture is held for at most this many frames, then taken again. Taken every frame, it
   // follows the light and the view best but the pose walks with it: an untextured figure

@@ -366,6 +366,9 @@ class Tracker {
   // replace_after_light_change). Set only with photometric_demoted_, which is lifted only
   // with it (StartWithGivenModel) or once colours come from the frames.
   bool demoted_by_light_ = false;
+  // The first frame's colours, taken because the silhouette alone could not confirm the
+  // given pose, aligned it less confidently than the silhouette (AlignFirstFrameAt).
+  bool start_colours_lost_ = false;
   // The model's own colours are not used (none, or the first frame found them misleading):
   // it takes them from the tracked frames (LiveAppearanceOptions).
   bool live_appearance_ = false;

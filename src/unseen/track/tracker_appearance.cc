@@ -29,6 +29,7 @@ void Tracker::StartWithGivenModel() {
   photometric_demoted_ = false;
   dragged_at_start_ = false;
   demoted_by_light_ = false;
+  start_colours_lost_ = false;
   best_share_ = 0.0;
   poor_fit_frames_ = 0;
   model_ = given_model_;
@@ -91,8 +92,9 @@ void Tracker::UpdateLiveAppearance(const Frame& frame, const TrackResult& r) {
 
 bool Tracker::ShowsAPrint(const Frame& frame, const TrackResult& r) const {
   const LiveAppearanceOptions& lo = options_.live_appearance;
-  if (live_appearance_ || lo.print_share > 1.0 || !MayTakeLiveAppearance() ||
-      r.status != TrackStatus::kTracking || r.confidence < lo.min_confidence) {
+  if (live_appearance_ || start_colours_lost_ || lo.print_share > 1.0 || !MayTakeLiveAppearance() ||
+      model_ != given_model_ || r.status != TrackStatus::kTracking ||
+      r.confidence < lo.min_confidence) {
     return false;
   }
   const std::shared_ptr<const Mesh> seen = CaptureLiveAppearance(frame, r.world_from_obj);

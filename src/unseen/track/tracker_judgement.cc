@@ -220,7 +220,8 @@ TrackResult Tracker::AlignFirstFrameAt(const Frame& frame, const Rigid3d& given)
   const LiveAppearanceOptions& lo = options_.live_appearance;
   // Lines left out because they run on past their end do not count against the pose: many
   // of them mean the rest confirm it on too little of the object.
-  const bool overruns = r.summary.region_counts.OverrunShare() > lo.first_overrun_share;
+  const bool overruns = options_.region.skip_overrun_lines &&
+                        r.summary.region_counts.OverrunShare() > lo.first_overrun_share;
   if (!live_appearance_ && lo.when_silhouette_fails && MayTakeLiveAppearance() &&
       (r.confidence < lo.min_confidence || overruns)) {
     // The silhouette alone does not confirm the given pose (an object coloured like its
@@ -232,15 +233,18 @@ TrackResult Tracker::AlignFirstFrameAt(const Frame& frame, const Rigid3d& given)
       TrackResult with_colours = AlignPredicted(frame, given);
       with_colours.summary.times += r.summary.times;
       if (with_colours.confidence > r.confidence ||
-          (overruns && with_colours.confidence >= r.confidence)) {
+          (overruns && with_colours.confidence >= r.confidence &&
+           with_colours.confidence >= lo.min_confidence)) {
         UNSEEN_LOG_INFO(
             "tracker: the silhouette alone does not confirm the given pose "
             "(confidence {:.2f}, {:.0f} % of its lines run on past their end); "
             "the model takes its colours from the frames (confidence {:.2f})",
-            r.confidence, 100.0 * r.summary.region_counts.OverrunShare(), with_colours.confidence);
+            r.confidence, 100.0 * std::max(0.0, r.summary.region_counts.OverrunShare()),
+            with_colours.confidence);
         return with_colours;
       }
       StartWithGivenModel();  // back to the model's own (no) colours
+      start_colours_lost_ = true;  // nor does a print give them at this frame (ShowsAPrint)
       r.summary.times = with_colours.summary.times;
     }
     RestoreLearnt(silhouette_learnt);
