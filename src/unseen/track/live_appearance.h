@@ -128,7 +128,9 @@ std::optional<Projector> CaptureProjector(const Mesh& model, const PinholeCamera
 
 // Share of the pixels the projector saw the model cover, `inset_px` or more inside its
 // outline, where the image's grey level changes by at least `min_gradient` per pixel (of
-// [0, 1]): how much of the surface shows a print; -1 when it covers none.
+// [0, 1]): how much of the surface shows a print; -1 when it covers none. (Grey-level steps
+// on the projector's crop; the modeller's Texturedness, a module above this one, sums the
+// colour channels' squared gradients over whole images.)
 double TexturedShare(const Projector& p, double min_gradient, int inset_px);
 
 }  // namespace unseen

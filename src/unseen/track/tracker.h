@@ -337,8 +337,9 @@ class Tracker {
   // the frames (LiveAppearanceOptions).
   bool MayTakeLiveAppearance() const;
   // A model without colours whose first frame, confidently tracked, shows a print over
-  // LiveAppearanceOptions::print_share of its surface.
-  bool ShowsAPrint(const Frame& frame, const TrackResult& r) const;
+  // LiveAppearanceOptions::print_share of its surface: the model with that frame's colours
+  // (as TakeLiveAppearance captures them); null otherwise.
+  std::shared_ptr<const Mesh> PrintSeenAtFirstFrame(const Frame& frame, const TrackResult& r) const;
   // After a tracked frame: whether the model's own colours have fitted so poorly for so
   // long that it should take them from the frames (LiveAppearanceOptions::poor_fit_share).
   bool ColoursNeverFitted(const TrackResult& r);

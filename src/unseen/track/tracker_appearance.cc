@@ -90,25 +90,26 @@ void Tracker::UpdateLiveAppearance(const Frame& frame, const TrackResult& r) {
   }
 }
 
-bool Tracker::ShowsAPrint(const Frame& frame, const TrackResult& r) const {
+std::shared_ptr<const Mesh> Tracker::PrintSeenAtFirstFrame(const Frame& frame,
+                                                           const TrackResult& r) const {
   const LiveAppearanceOptions& lo = options_.live_appearance;
   if (live_appearance_ || start_colours_lost_ || lo.print_share > 1.0 || !MayTakeLiveAppearance() ||
       model_ != given_model_ || r.status != TrackStatus::kTracking ||
       r.confidence < lo.min_confidence) {
-    return false;
+    return nullptr;
   }
-  const std::shared_ptr<const Mesh> seen = CaptureLiveAppearance(frame, r.world_from_obj);
-  if (!seen) return false;
+  std::shared_ptr<const Mesh> seen = CaptureLiveAppearance(frame, r.world_from_obj);
+  if (!seen) return nullptr;
   double share = -1.0;
   for (const Projector& p : seen->projectors) {
     share = std::max(share, TexturedShare(p, lo.print_min_gradient, lo.print_inset_px));
   }
-  if (share < lo.print_share) return false;
+  if (share < lo.print_share) return nullptr;
   UNSEEN_LOG_INFO(
       "tracker: the model has no colours but the first frame shows a print on {:.0f} % "
       "of it; it takes its colours from the tracked frames",
       100.0 * share);
-  return true;
+  return seen;
 }
 
 std::shared_ptr<const Mesh> Tracker::CaptureLiveAppearance(const Frame& frame,

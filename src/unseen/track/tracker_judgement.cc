@@ -244,7 +244,8 @@ TrackResult Tracker::AlignFirstFrameAt(const Frame& frame, const Rigid3d& given)
         return with_colours;
       }
       StartWithGivenModel();  // back to the model's own (no) colours
-      start_colours_lost_ = true;  // nor does a print give them at this frame (ShowsAPrint)
+      start_colours_lost_ =
+          true;  // nor does a print give them at this frame (PrintSeenAtFirstFrame)
       r.summary.times = with_colours.summary.times;
     }
     RestoreLearnt(silhouette_learnt);

@@ -5,6 +5,7 @@
 // frames. The alignment of one frame is tracker.cc's.
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "unseen/track/reacquisition.h"
 #include "unseen/track/tracker.h"
@@ -253,8 +254,13 @@ TrackResult Tracker::Track(const Frame& input_frame) {
                     frame.frame_id, r.summary.share, best_share_);
     live_appearance_ = true;
   }
-  if (first_frame && ShowsAPrint(frame, r)) live_appearance_ = true;
-  UpdateLiveAppearance(frame, r);
+  if (std::shared_ptr<const Mesh> printed =
+          first_frame ? PrintSeenAtFirstFrame(frame, r) : nullptr) {
+    live_appearance_ = true;
+    AdoptLiveAppearance(std::move(printed));  // as UpdateLiveAppearance would take it
+  } else {
+    UpdateLiveAppearance(frame, r);
+  }
   r.summary.times.predict_ms = predict_ms;
   r.summary.times.total_ms = total.ElapsedMilliseconds();
   return r;
